@@ -1,0 +1,87 @@
+"""What every generator shares: parameter errors, staged atomic output, manifests, PLY and map writers."""
+from __future__ import annotations
+
+import contextlib
+import json
+import shutil
+import tempfile
+from pathlib import Path
+from typing import Any, Iterator
+
+import numpy as np
+
+from assets_gen import __version__
+
+
+class GeneratorError(ValueError):
+    """A bad generator parameter; the CLI prints it on one line and exits with code 2."""
+
+
+def require(cond: bool, message: str) -> None:
+    """Raise :class:`GeneratorError` with ``message`` unless ``cond`` holds."""
+    if not cond:
+        raise GeneratorError(message)
+
+
+@contextlib.contextmanager
+def staged_output(out_dir: str | Path) -> Iterator[Path]:
+    """Yield an empty staging folder; its files move into ``out_dir`` only if the body succeeds,
+    so a failed or interrupted generator leaves nothing half-written behind."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(prefix=".staging-", dir=out_dir))
+    try:
+        yield stage
+        for f in sorted(stage.iterdir()):
+            f.replace(out_dir / f.name)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+
+
+def write_manifest(path: str | Path, generator: str, params: dict[str, Any], seed: int,
+                   outputs: list[str]) -> None:
+    """Record what made these files (deterministic JSON: sorted keys, no timestamps)."""
+    doc = {"generator": generator, "version": __version__, "seed": int(seed),
+           "params": _jsonable(params), "outputs": sorted(outputs)}
+    Path(path).write_text(json.dumps(doc, indent=2, sort_keys=True) + "\n")
+
+
+def _jsonable(x: Any) -> Any:
+    if isinstance(x, dict):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    if isinstance(x, Path):
+        return str(x)
+    return x
+
+
+def write_ply(path: str | Path, vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray | None = None,
+              uvs: np.ndarray | None = None) -> None:
+    """Binary little-endian PLY with float32 positions, optional normals (nx, ny, nz) and UVs (u, v),
+    the layout pbrt-v4's ``plymesh`` reads. Byte-identical for identical input."""
+    from plyfile import PlyData, PlyElement
+
+    v = np.asarray(vertices, dtype=np.float32)
+    fields = [("x", "f4"), ("y", "f4"), ("z", "f4")]
+    cols = [v[:, 0], v[:, 1], v[:, 2]]
+    if normals is not None:
+        n = np.asarray(normals, dtype=np.float32)
+        fields += [("nx", "f4"), ("ny", "f4"), ("nz", "f4")]
+        cols += [n[:, 0], n[:, 1], n[:, 2]]
+    if uvs is not None:
+        t = np.asarray(uvs, dtype=np.float32)
+        fields += [("u", "f4"), ("v", "f4")]
+        cols += [t[:, 0], t[:, 1]]
+    vert = np.empty(len(v), dtype=fields)
+    for (name, _), c in zip(fields, cols):
+        vert[name] = c
+    f = np.asarray(faces, dtype=np.int32)
+    face = np.empty(len(f), dtype=[("vertex_indices", "i4", (3,))])
+    face["vertex_indices"] = f
+    PlyData([PlyElement.describe(vert, "vertex"), PlyElement.describe(face, "face")],
+            byte_order="<").write(str(path))

@@ -1,0 +1,90 @@
+"""Reading and writing images: EXR through OpenEXR, PNG/JPEG through Pillow. Writes are atomic."""
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from pathlib import Path
+from typing import Iterator
+
+import numpy as np
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | Path) -> Iterator[Path]:
+    """Yield a temporary path beside ``path`` and rename it over ``path`` only if the body succeeds,
+    so an interrupted write never leaves a truncated file."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def write_exr(path: str | Path, channels: dict[str, np.ndarray] | np.ndarray,
+              header: dict[str, object] | None = None) -> None:
+    """Write float32 channels (``{"R": (H, W), ...}``, or an (H, W, 3|1) array) with extra header fields."""
+    import OpenEXR
+
+    if isinstance(channels, np.ndarray):
+        a = channels if channels.ndim == 3 else channels[..., None]
+        names = "RGB" if a.shape[2] == 3 else ("Y" if a.shape[2] == 1 else "RGBA")
+        channels = {n: a[..., i] for i, n in enumerate(names)}
+    chans = {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in channels.items()}
+    hdr = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    hdr.update({k: (str(v) if not isinstance(v, (int, float)) else float(v)) for k, v in (header or {}).items()})
+    with atomic_path(path) as tmp:
+        with OpenEXR.File(hdr, chans) as f:
+            f.write(str(tmp))
+
+
+def read_exr(path: str | Path) -> tuple[dict[str, np.ndarray], dict[str, object]]:
+    """Return ({channel: (H, W) float32}, header)."""
+    import OpenEXR
+
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        chans = {k: np.array(c.pixels, dtype=np.float32) for k, c in f.channels().items()}
+        return chans, dict(f.header())
+
+
+def read_image(path: str | Path, *, srgb: bool | None = None) -> np.ndarray:
+    """Any supported image as linear float32 (H, W, C). 8-bit images are decoded from sRGB unless
+    ``srgb`` is False; EXR and 16-bit/float images are taken as linear."""
+    from renderer.color import srgb_to_linear
+
+    path = Path(path)
+    if path.suffix.lower() == ".exr":
+        chans, _ = read_exr(path)
+        order = [c for c in ("R", "G", "B", "A") if c in chans] or sorted(chans)
+        return np.stack([chans[c] for c in order], axis=-1)
+    from PIL import Image
+
+    with Image.open(path) as im:
+        a = np.asarray(im)
+    if a.ndim == 2:
+        a = a[..., None]
+    if a.dtype == np.uint8:
+        x = a.astype(np.float32) / 255.0
+        return srgb_to_linear(x) if srgb is not False else x
+    if a.dtype == np.uint16:
+        return a.astype(np.float32) / 65535.0
+    return a.astype(np.float32)
+
+
+def write_png(path: str | Path, rgb_linear: np.ndarray, exposure: float = 0.0) -> None:
+    """Tone-map linear RGB to 8-bit sRGB (exposure in stops, then clip) and write it atomically."""
+    from PIL import Image
+
+    from renderer.color import linear_to_srgb
+
+    x = np.nan_to_num(np.asarray(rgb_linear, dtype=np.float64), nan=0.0) * (2.0 ** exposure)
+    img = (linear_to_srgb(x) * 255.0 + 0.5).astype(np.uint8)
+    if img.ndim == 3 and img.shape[2] == 1:
+        img = img[..., 0]
+    with atomic_path(path) as tmp:
+        Image.fromarray(img).save(tmp, format="PNG")

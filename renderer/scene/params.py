@@ -1,0 +1,159 @@
+"""pbrt-style typed parameter lists (``"float fov" [45]``) and typed look-ups with located errors."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from renderer.errors import Location, SceneError
+
+#: Parameter types of the pbrt-v4 format that this renderer understands.
+PARAM_TYPES = {
+    "integer", "float", "point2", "vector2", "point3", "vector3", "normal3", "normal",
+    "point", "vector", "rgb", "spectrum", "blackbody", "bool", "string", "texture",
+}
+
+
+@dataclass
+class Param:
+    """One ``"type name" [values]`` entry as written in the file."""
+
+    type: str
+    name: str
+    values: list[Any]
+    loc: Location
+    used: bool = False
+
+
+@dataclass
+class ParamSet:
+    """The parameters of one directive. Look-ups mark entries used so leftovers can be warned about."""
+
+    params: dict[str, Param] = field(default_factory=dict)
+    loc: Location | None = None
+
+    def add(self, p: Param) -> None:
+        if p.name in self.params:
+            raise SceneError(f'parameter "{p.name}" given twice', p.loc)
+        self.params[p.name] = p
+
+    def __contains__(self, name: str) -> bool:
+        return name in self.params
+
+    def get(self, name: str) -> Param | None:
+        p = self.params.get(name)
+        if p is not None:
+            p.used = True
+        return p
+
+    def _one(self, name: str, types: tuple[str, ...], n: int) -> Param | None:
+        p = self.get(name)
+        if p is None:
+            return None
+        if p.type not in types:
+            raise SceneError(f'parameter "{name}" must be of type {" or ".join(types)}, not {p.type}', p.loc)
+        if len(p.values) != n:
+            raise SceneError(f'parameter "{name}" needs {n} value(s), got {len(p.values)}', p.loc)
+        return p
+
+    def float(self, name: str, default: float | None = None, *, min: float | None = None,
+              max: float | None = None) -> float | None:
+        p = self._one(name, ("float", "integer"), 1)
+        if p is None:
+            return default
+        v = float(p.values[0])
+        if not math.isfinite(v):
+            raise SceneError(f'parameter "{name}" must be finite, got {v}', p.loc)
+        if min is not None and v < min:
+            raise SceneError(f'parameter "{name}" must be >= {min}, got {v}', p.loc)
+        if max is not None and v > max:
+            raise SceneError(f'parameter "{name}" must be <= {max}, got {v}', p.loc)
+        return v
+
+    def int(self, name: str, default: int | None = None, *, min: int | None = None) -> int | None:
+        p = self._one(name, ("integer",), 1)
+        if p is None:
+            return default
+        v = int(p.values[0])
+        if min is not None and v < min:
+            raise SceneError(f'parameter "{name}" must be >= {min}, got {v}', p.loc)
+        return v
+
+    def bool(self, name: str, default: bool | None = None) -> bool | None:
+        p = self._one(name, ("bool",), 1)
+        return default if p is None else bool(p.values[0])
+
+    def string(self, name: str, default: str | None = None) -> str | None:
+        p = self._one(name, ("string",), 1)
+        return default if p is None else str(p.values[0])
+
+    def texture(self, name: str) -> str | None:
+        p = self._one(name, ("texture",), 1)
+        return None if p is None else str(p.values[0])
+
+    def floats(self, name: str, types: tuple[str, ...] = ("float",)) -> np.ndarray | None:
+        """All values of an array parameter as float64, or None when absent."""
+        p = self.get(name)
+        if p is None:
+            return None
+        if p.type not in types:
+            raise SceneError(f'parameter "{name}" must be of type {" or ".join(types)}, not {p.type}', p.loc)
+        a = np.asarray(p.values, dtype=np.float64)
+        if not np.all(np.isfinite(a)):
+            raise SceneError(f'parameter "{name}" contains NaN or infinite values', p.loc)
+        return a
+
+    def ints(self, name: str) -> np.ndarray | None:
+        p = self.get(name)
+        if p is None:
+            return None
+        if p.type != "integer":
+            raise SceneError(f'parameter "{name}" must be of type integer, not {p.type}', p.loc)
+        return np.asarray(p.values, dtype=np.int64)
+
+    def unused(self) -> list[Param]:
+        """Parameters nobody looked up: the caller warns about them (file:line)."""
+        return [p for p in self.params.values() if not p.used]
+
+    def rgb(self, name: str, default: Any = None) -> np.ndarray | None:
+        """A colour parameter as linear sRGB: ``rgb``, ``blackbody`` (luminance 1, as pbrt-v4) or a
+        constant ``spectrum`` value. Named and sampled spectra are refused rather than guessed."""
+        p = self.get(name)
+        if p is None:
+            return None if default is None else np.asarray(default, dtype=np.float64) * np.ones(3)
+        if p.type == "rgb":
+            if len(p.values) != 3:
+                raise SceneError(f'parameter "{name}" needs 3 values, got {len(p.values)}', p.loc)
+            v = np.asarray(p.values, dtype=np.float64)
+        elif p.type == "blackbody":
+            if len(p.values) != 1 or not float(p.values[0]) > 0:
+                raise SceneError(f'parameter "{name}": blackbody needs one positive temperature in kelvin', p.loc)
+            from renderer.color import blackbody_rgb
+
+            v = blackbody_rgb(float(p.values[0]))
+        elif p.type == "spectrum" and len(p.values) == 1 and not isinstance(p.values[0], str):
+            v = np.full(3, float(p.values[0]))
+        elif p.type in ("float",) and len(p.values) == 1:
+            v = np.full(3, float(p.values[0]))
+        else:
+            raise SceneError(f'parameter "{name}": only rgb, blackbody and constant spectrum values are '
+                             f'supported (got {p.type} {p.values[:4]})', p.loc)
+        if not np.all(np.isfinite(v)):
+            raise SceneError(f'parameter "{name}" contains NaN or infinite values', p.loc)
+        return v
+
+    def rgb_or_texture(self, name: str, default: Any = None) -> np.ndarray | str | None:
+        """A colour that may also name a texture (returned as the texture's name)."""
+        p = self.params.get(name)
+        if p is not None and p.type == "texture":
+            return self.texture(name)
+        return self.rgb(name, default)
+
+    def float_or_texture(self, name: str, default: float | None = None, **limits: float) -> float | str | None:
+        """A float that may also name a float texture (returned as the texture's name)."""
+        p = self.params.get(name)
+        if p is not None and p.type == "texture":
+            return self.texture(name)
+        return self.float(name, default, **limits)
