@@ -12,13 +12,18 @@ PI = wp.constant(3.14159265358979323846)
 INV_PI = wp.constant(0.31830988618379067154)
 
 
+_HASH_M1 = wp.constant(wp.uint32(0x7FEB352D))
+_HASH_M2 = wp.constant(wp.uint32(0x846CA68B))
+_GOLDEN = wp.constant(wp.uint32(0x9E3779B9))
+
+
 @wp.func
 def hash_u32(x: wp.uint32) -> wp.uint32:
     """A 32-bit integer finaliser (lowbias32), so nearby seeds give unrelated streams."""
     x = x ^ (x >> wp.uint32(16))
-    x = x * wp.uint32(0x7FEB352D)
+    x = x * _HASH_M1
     x = x ^ (x >> wp.uint32(15))
-    x = x * wp.uint32(0x846CA68B)
+    x = x * _HASH_M2
     x = x ^ (x >> wp.uint32(16))
     return x
 
@@ -26,7 +31,7 @@ def hash_u32(x: wp.uint32) -> wp.uint32:
 @wp.func
 def sample_rng(seed: int, sample_index: int, pixel: int) -> wp.uint32:
     """The RNG state for one (seed, sample, pixel); draws from it are the path's dimensions."""
-    key = hash_u32(wp.uint32(seed) ^ hash_u32(wp.uint32(sample_index) + wp.uint32(0x9E3779B9)))
+    key = hash_u32(wp.uint32(seed) ^ hash_u32(wp.uint32(sample_index) + _GOLDEN))
     return wp.rand_init(wp.int32(key), pixel)
 
 

@@ -1,0 +1,137 @@
+"""Upload: a :class:`SceneDescription` becomes one Warp struct of device arrays, plus the set of
+features (material types, light types, bump maps) the integrator kernel is specialised to."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import warp as wp
+
+from renderer.camera import Camera, build_camera
+from renderer.errors import SceneError
+from renderer.geometry import Geometry, GeometryData, build_geometry
+from renderer.lights import AREA, DISTANT, LightTable, Lights
+from renderer.materials import Materials, build_materials
+from renderer.scene.description import SceneDescription
+from renderer.textures import Textures, TextureTable
+
+
+@wp.struct
+class Scene:
+    geo: Geometry
+    tex: Textures
+    mat: Materials
+    lights: Lights
+    cam: Camera
+    shape_material: wp.array(dtype=int)
+    shape_light: wp.array(dtype=int)
+    shape_flip: wp.array(dtype=int)
+
+
+@dataclass(frozen=True)
+class Features:
+    """What a scene needs from the integrator; each distinct value compiles one kernel."""
+
+    materials: tuple[str, ...]
+    bump: bool
+    env: bool
+    area: bool
+    soft_distant: bool
+    nee: bool = True
+
+
+@dataclass
+class DeviceScene:
+    struct: Scene
+    features: Features
+    device: str
+    width: int
+    height: int
+    keep: list = field(default_factory=list)     # every Warp object the struct points into
+    geometry: GeometryData | None = None
+
+
+def upload(desc: SceneDescription, device: str, width: int | None = None, height: int | None = None,
+           nee: bool = True) -> DeviceScene:
+    width = width or desc.film.width
+    height = height or desc.film.height
+    if not desc.instance_sets:
+        raise SceneError("the scene contains no shapes", None)
+    table = TextureTable()
+    warnings = desc.warnings
+    mats, mat_keep, used = build_materials(desc.materials, desc.textures, table, warnings, device)
+    lights = LightTable()
+
+    # flatten instance sets into one instance list
+    inst_mesh, inst_shape, xforms = [], [], []
+    for s in desc.instance_sets:
+        k = len(s.transforms)
+        for shape in s.shapes:
+            inst_mesh.append(np.full(k, desc.shapes[shape].mesh, dtype=np.int32))
+            inst_shape.append(np.full(k, shape, dtype=np.int32))
+            xforms.append(np.asarray(s.transforms, dtype=np.float64).reshape(k, 4, 4))
+    inst_mesh_a = np.concatenate(inst_mesh)
+    inst_shape_a = np.concatenate(inst_shape)
+    xform_a = np.concatenate(xforms)
+
+    # area lights: world-space triangles of every instance of an emissive shape
+    shape_light = -np.ones(max(1, len(desc.shapes)), dtype=np.int32)
+    for si, shape in enumerate(desc.shapes):
+        if shape.area_light is None:
+            continue
+        mesh = desc.meshes[shape.mesh]
+        sel = np.nonzero(inst_shape_a == si)[0]
+        tris = []
+        for k in sel:
+            m = xform_a[k]
+            p = mesh.positions.astype(np.float64) @ m[:3, :3].T + m[:3, 3]
+            t = p[mesh.indices]
+            if shape.reverse_orientation:
+                t = t[:, ::-1]
+            tris.append(t)
+        if tris:
+            shape_light[si] = lights.add_area(np.concatenate(tris), shape.area_light.L, shape.area_light.two_sided)
+
+    for inf in desc.infinite_lights:
+        image = None
+        if inf.filename is not None:
+            from renderer.errors import MissingFileError
+            from renderer.imageio import read_image
+
+            if not inf.filename.is_file():
+                raise MissingFileError(inf.filename, inf.loc, "environment image")
+            image = read_image(inf.filename, srgb=True)
+        lights.add_infinite(inf.L, image, inf.light_to_world, inf.loc)
+    for dl in desc.distant_lights:
+        lights.add_distant(dl.direction, dl.L, dl.angular_radius_deg)
+    if not lights.kind:
+        warnings.append("scene has no lights: the image will be black")
+
+    geo = build_geometry([(m.positions, m.indices, m.normals, m.uvs) for m in desc.meshes],
+                         inst_mesh_a, inst_shape_a, xform_a, device)
+    tex, tex_keep = table.upload(device)
+    L, light_keep = lights.upload(device)
+
+    S = Scene()
+    S.geo = geo.struct
+    S.tex = tex
+    S.mat = mats
+    S.lights = L
+    S.cam = build_camera(desc.camera, width, height)
+    S.shape_material = wp.array(np.array([s.material for s in desc.shapes] or [0], np.int32), dtype=int, device=device)
+    S.shape_light = wp.array(shape_light, dtype=int, device=device)
+    # normals come from world-space winding; the builder's reverse_orientation already includes
+    # pbrt's handedness swap, so together they orient normals as pbrt does
+    flip = [int(s.reverse_orientation) for s in desc.shapes] or [0]
+    S.shape_flip = wp.array(np.array(flip, np.int32), dtype=int, device=device)
+
+    feats = Features(
+        materials=tuple(sorted(used)),
+        bump=bool(np.any(mats.bump.numpy() >= 0)),
+        env=lights.env >= 0,
+        area=AREA in lights.kind,
+        soft_distant=any(k == DISTANT and c < 1.0 for k, c in zip(lights.kind, lights.cos_max)),
+        nee=nee,
+    )
+    keep = [geo, mat_keep, tex_keep, light_keep, S.shape_material, S.shape_light, S.shape_flip]
+    return DeviceScene(struct=S, features=feats, device=device, width=width, height=height, keep=keep, geometry=geo)

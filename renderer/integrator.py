@@ -1,0 +1,202 @@
+"""The path-tracing megakernel: one thread per pixel, a bounded path loop, next-event estimation
+with MIS against BSDF sampling, and Russian roulette.
+
+``integrator_kernel(features)`` builds (once per distinct :class:`Features`) a kernel that only
+contains the material types, light types and bump mapping the scene uses, so a diffuse-only
+scene compiles and runs the same code however many materials the renderer learns.
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+
+import warp as wp
+
+from renderer.camera import generate_ray
+from renderer.device_scene import Features, Scene
+from renderer.geometry import intersect, occluded, offset_origin, ray_epsilon, surface_at
+from renderer.lights import DISTANT, area_emitted, area_pdf, distant_cone_radiance, env_pdf, env_radiance, sample_light
+from renderer.materials import REGISTRY, kind_id
+from renderer.materials.bsdf import BSDF, MAX_SLOTS, BSDFSample, Slots
+from renderer.sampling import frame_from_tangent, max3, power_heuristic, rand2, sample_rng, to_local, to_world
+from renderer.textures import texture_eval
+
+#: Depth from which Russian roulette may end a path (pbrt-v4 starts after the second bounce).
+RR_DEPTH = 2
+#: Finite-difference step in texture space for bump mapping (pbrt's fallback without ray differentials).
+BUMP_DELTA = 0.0005
+
+
+@wp.func
+def load_bsdf(scene: Scene, m: int, uv: wp.vec2) -> BSDF:
+    """Evaluate a material's parameter textures at uv into the rows of ``BSDF.p``."""
+    p = Slots()
+    for j in range(MAX_SLOTS):
+        tid = scene.mat.slots[m, j]
+        if tid >= 0:
+            v = texture_eval(scene.tex, tid, uv)
+            p[j, 0] = v[0]
+            p[j, 1] = v[1]
+            p[j, 2] = v[2]
+    b = BSDF()
+    b.kind = scene.mat.kind[m]
+    b.p = p
+    return b
+
+
+@wp.func
+def bump_normal(scene: Scene, tid: int, uv: wp.vec2, ns: wp.vec3, dpdu: wp.vec3, dpdv: wp.vec3) -> wp.vec3:
+    """Shading normal perturbed by a float displacement texture (pbrt's bump mapping, without the
+    dn/du term): the displaced surface's tangents cross to the new normal."""
+    d = texture_eval(scene.tex, tid, uv)[0]
+    du = BUMP_DELTA
+    dv = BUMP_DELTA
+    d_u = texture_eval(scene.tex, tid, wp.vec2(uv[0] + du, uv[1]))[0]
+    d_v = texture_eval(scene.tex, tid, wp.vec2(uv[0], uv[1] + dv))[0]
+    su = dpdu + ns * ((d_u - d) / du)
+    sv = dpdv + ns * ((d_v - d) / dv)
+    n = wp.cross(su, sv)
+    ln = wp.length(n)
+    if ln <= 0.0:
+        return ns
+    n = n / ln
+    if wp.dot(n, ns) < 0.0:
+        n = -n
+    return n
+
+
+@lru_cache(maxsize=None)
+def integrator_kernel(features: Features) -> wp.Kernel:
+    mods = [REGISTRY[name] for name in features.materials]
+    kinds = [kind_id(name) for name in features.materials]
+    n_mat = len(mods)
+    has_bump = features.bump
+    has_env = features.env
+    has_area = features.area
+    has_soft = features.soft_distant
+    nee = features.nee
+
+    @wp.kernel(module="unique")
+    def integrate(scene: Scene, seed: int, sample_start: int, n_samples: int, row_offset: int, max_depth: int,
+                  film: wp.array(dtype=wp.vec3d), bad_samples: wp.array(dtype=int)):
+        tid = wp.tid()
+        width = scene.cam.width
+        pixel = row_offset * width + tid
+        px = pixel % width
+        py = pixel // width
+        n_lights = scene.lights.count
+        sel = 1.0 / float(wp.max(n_lights, 1))
+        acc = wp.vec3(0.0)
+        for k in range(n_samples):
+            rng = sample_rng(seed, sample_start + k, pixel)
+            jit = rand2(rng)
+            ray = generate_ray(scene.cam, float(px) + jit[0], float(py) + jit[1], rand2(rng))
+            o = ray.o
+            d = ray.d
+            L = wp.vec3(0.0)
+            beta = wp.vec3(1.0)
+            prev_pdf = float(0.0)
+            prev_specular = bool(True)
+            prev_p = o
+            depth = int(0)
+            while True:
+                hit = intersect(scene.geo, o, d, 1.0e30)
+                if hit.inst < 0:
+                    if wp.static(has_env):
+                        Le = env_radiance(scene.lights, d)
+                        w = float(1.0)
+                        if wp.static(nee):
+                            if not prev_specular:
+                                w = power_heuristic(prev_pdf, env_pdf(scene.lights, d) * sel)
+                        L = L + wp.cw_mul(beta, Le) * w
+                    if wp.static(has_soft):
+                        for i in range(n_lights):
+                            if scene.lights.kind[i] == DISTANT:
+                                Ld = distant_cone_radiance(scene.lights, i, d)
+                                if max3(Ld) > 0.0:
+                                    w = float(1.0)
+                                    if wp.static(nee):
+                                        if not prev_specular:
+                                            cm = scene.lights.cos_max[i]
+                                            w = power_heuristic(prev_pdf, sel / (6.283185307179586 * (1.0 - cm)))
+                                    L = L + wp.cw_mul(beta, Ld) * w
+                    break
+                shape = scene.geo.inst_shape[hit.inst]
+                s = surface_at(scene.geo, hit, scene.shape_flip[shape] != 0)
+                wo = -d
+                if wp.static(has_area):
+                    li = scene.shape_light[shape]
+                    if li >= 0:
+                        Le = area_emitted(scene.lights, li, s.ng, wo)
+                        w = float(1.0)
+                        if wp.static(nee):
+                            if not prev_specular:
+                                w = power_heuristic(prev_pdf, area_pdf(scene.lights, li, prev_p, s.p, s.ng) * sel)
+                        L = L + wp.cw_mul(beta, Le) * w
+                if depth >= max_depth:
+                    break
+                m = scene.shape_material[shape]
+                b = load_bsdf(scene, m, s.uv)
+                b.wavelength_u = wp.randf(rng)
+                ns = s.ns
+                if wp.static(has_bump):
+                    bt = scene.mat.bump[m]
+                    if bt >= 0:
+                        ns = bump_normal(scene, bt, s.uv, ns, s.dpdu, s.dpdv)
+                frame = frame_from_tangent(ns, s.dpdu)
+                wo_l = to_local(frame, wo)
+
+                # next-event estimation: one light, MIS-weighted against BSDF sampling
+                u_sel = wp.randf(rng)
+                u_light = rand2(rng)
+                if wp.static(nee):
+                    if n_lights > 0:
+                        ls = sample_light(scene.lights, s.p, u_sel, u_light)
+                        if ls.pdf > 0.0 and max3(ls.L) > 0.0:
+                            wi_l = to_local(frame, ls.wi)
+                            f = wp.vec3(0.0)
+                            pdf_b = float(0.0)
+                            for j in range(wp.static(n_mat)):
+                                if b.kind == wp.static(kinds[j]):
+                                    f = wp.static(mods[j].eval)(b, wo_l, wi_l)
+                                    pdf_b = wp.static(mods[j].pdf)(b, wo_l, wi_l)
+                            f = f * wp.abs(wi_l[2])
+                            if max3(f) > 0.0:
+                                origin = offset_origin(s.p, s.ng, ls.wi)
+                                t_max = ls.dist * (1.0 - 1.0e-5) - ray_epsilon(s.p)
+                                if not occluded(scene.geo, origin, ls.wi, t_max):
+                                    w = float(1.0)
+                                    if not ls.delta:
+                                        w = power_heuristic(ls.pdf, pdf_b)
+                                    L = L + wp.cw_mul(beta, wp.cw_mul(f, ls.L)) * (w / ls.pdf)
+
+                # continue the path by sampling the BSDF
+                u_bsdf = wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng))
+                bs = BSDFSample()
+                for j in range(wp.static(n_mat)):
+                    if b.kind == wp.static(kinds[j]):
+                        bs = wp.static(mods[j].sample)(b, wo_l, u_bsdf)
+                if bs.pdf <= 0.0:
+                    break
+                beta = wp.cw_mul(beta, bs.weight)
+                wi = wp.normalize(to_world(frame, bs.wi))
+                prev_pdf = bs.pdf
+                prev_specular = bs.specular
+                prev_p = s.p
+                o = offset_origin(s.p, s.ng, wi)
+                d = wi
+                depth += 1
+                u_rr = wp.randf(rng)
+                if depth >= RR_DEPTH:
+                    mb = max3(beta)
+                    if mb < 1.0:
+                        q = wp.max(0.0, 1.0 - mb)
+                        if u_rr < q:
+                            break
+                        beta = beta / (1.0 - q)
+            if wp.isfinite(L) and L[0] >= 0.0 and L[1] >= 0.0 and L[2] >= 0.0:
+                acc = acc + L
+            else:
+                wp.atomic_add(bad_samples, 0, 1)
+        film[pixel] = film[pixel] + wp.vec3d(wp.float64(acc[0]), wp.float64(acc[1]), wp.float64(acc[2]))
+
+    return integrate

@@ -1,0 +1,49 @@
+"""The interface every material implements, in the local shading frame (z = shading normal).
+
+- ``eval(b, wo, wi) -> vec3``: the BSDF value f (without the cosine); 0 for delta lobes.
+- ``pdf(b, wo, wi) -> float``: solid-angle density with which ``sample`` picks ``wi``.
+- ``sample(b, wo, u) -> BSDFSample``: a direction with its throughput weight f·|cos θi|/pdf.
+
+``wo`` may lie below the surface (transmission, or the back of a two-sided material); each
+material decides what that means. Parameters arrive already evaluated from textures in the rows
+of ``BSDF.p`` (one row per parameter slot, in the order the material's ``SLOTS`` lists them).
+"""
+from __future__ import annotations
+
+import warp as wp
+
+MAX_SLOTS = 16
+Slots = wp.types.matrix(shape=(MAX_SLOTS, 3), dtype=wp.float32)
+
+
+@wp.struct
+class BSDF:
+    kind: int
+    p: Slots
+    wavelength_u: float     # a per-sample random number for materials that sample wavelengths
+
+
+@wp.struct
+class BSDFSample:
+    wi: wp.vec3
+    weight: wp.vec3         # f * |cos θi| / pdf
+    pdf: float              # 0 means the sample failed; meaningless for delta lobes
+    specular: bool          # a delta lobe: skip MIS, NEE cannot reach it
+
+
+@wp.func
+def failed_sample() -> BSDFSample:
+    s = BSDFSample()
+    s.pdf = 0.0
+    return s
+
+
+@wp.func
+def same_hemisphere(a: wp.vec3, b: wp.vec3) -> bool:
+    return a[2] * b[2] > 0.0
+
+
+@wp.func
+def reflect_z(w: wp.vec3) -> wp.vec3:
+    """Mirror reflection about the local normal."""
+    return wp.vec3(-w[0], -w[1], w[2])

@@ -1,0 +1,83 @@
+"""The anisotropic Trowbridge–Reitz (GGX) microfacet distribution with visible-normal sampling
+(Heitz 2018), shared by the rough conductor and rough dielectric."""
+from __future__ import annotations
+
+import warp as wp
+
+from renderer.sampling import PI
+
+
+@wp.func
+def ggx_D(wm: wp.vec3, alpha: wp.vec2) -> float:
+    cos2 = wm[2] * wm[2]
+    if cos2 <= 0.0:
+        return 0.0
+    x = wm[0] / alpha[0]
+    y = wm[1] / alpha[1]
+    e = x * x + y * y + cos2
+    return 1.0 / (PI * alpha[0] * alpha[1] * e * e)
+
+
+@wp.func
+def ggx_lambda(w: wp.vec3, alpha: wp.vec2) -> float:
+    cos2 = w[2] * w[2]
+    if cos2 <= 0.0:
+        return 1.0e30
+    t2 = (alpha[0] * alpha[0] * w[0] * w[0] + alpha[1] * alpha[1] * w[1] * w[1]) / cos2
+    return 0.5 * (wp.sqrt(1.0 + t2) - 1.0)
+
+
+@wp.func
+def ggx_G1(w: wp.vec3, alpha: wp.vec2) -> float:
+    return 1.0 / (1.0 + ggx_lambda(w, alpha))
+
+
+@wp.func
+def ggx_G(wo: wp.vec3, wi: wp.vec3, alpha: wp.vec2) -> float:
+    """Height-correlated masking-shadowing."""
+    return 1.0 / (1.0 + ggx_lambda(wo, alpha) + ggx_lambda(wi, alpha))
+
+
+@wp.func
+def ggx_visible_pdf(w: wp.vec3, wm: wp.vec3, alpha: wp.vec2) -> float:
+    """Density of visible normals wm seen from w (either side): G1(w) |w·wm| D(wm) / |cos θ_w|."""
+    cw = wp.abs(w[2])
+    if cw == 0.0:
+        return 0.0
+    return ggx_G1(w, alpha) * wp.abs(wp.dot(w, wm)) * ggx_D(wm, alpha) / cw
+
+
+@wp.func
+def ggx_sample_visible(w: wp.vec3, alpha: wp.vec2, u: wp.vec2) -> wp.vec3:
+    """A microfacet normal (on the +z side) distributed by visible area as seen from w."""
+    if w[2] < 0.0:
+        w = -w
+    wh = wp.normalize(wp.vec3(alpha[0] * w[0], alpha[1] * w[1], w[2]))
+    t1 = wp.vec3(1.0, 0.0, 0.0)
+    if wh[2] < 0.99999:
+        t1 = wp.normalize(wp.cross(wp.vec3(0.0, 0.0, 1.0), wh))
+    t2 = wp.cross(wh, t1)
+    r = wp.sqrt(u[0])
+    phi = 2.0 * PI * u[1]
+    p0 = r * wp.cos(phi)
+    p1 = r * wp.sin(phi)
+    h = wp.sqrt(wp.max(0.0, 1.0 - p0 * p0))
+    s = 0.5 * (1.0 + wh[2])
+    p1 = (1.0 - s) * h + s * p1
+    p2 = wp.sqrt(wp.max(0.0, 1.0 - p0 * p0 - p1 * p1))
+    nh = t1 * p0 + t2 * p1 + wh * p2
+    return wp.normalize(wp.vec3(alpha[0] * nh[0], alpha[1] * nh[1], wp.max(1.0e-6, nh[2])))
+
+
+@wp.func
+def is_smooth(alpha: wp.vec2) -> bool:
+    """Below this roughness the lobe is treated as a perfect mirror (as pbrt does)."""
+    return wp.max(alpha[0], alpha[1]) < 1.0e-3
+
+
+@wp.func
+def roughness_to_alpha(r: wp.vec2, remap: float) -> wp.vec2:
+    """pbrt-v4's remapping: alpha = sqrt(roughness) when ``remaproughness`` is true."""
+    if remap > 0.5:
+        return wp.vec2(wp.sqrt(wp.max(r[0], 0.0)), wp.sqrt(wp.max(r[1], 0.0)))
+    return r

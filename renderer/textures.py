@@ -1,0 +1,200 @@
+"""Textures on the device: one table of records (constant, image, checkerboard) and one pool of
+image pixels. Every material parameter is a texture id, so constants and maps share one path."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import warp as wp
+
+from renderer.errors import MissingFileError, SceneError
+from renderer.scene.description import TextureDesc
+
+CONSTANT = 0
+IMAGE = 1
+CHECKERBOARD = 2
+WRAP = {"repeat": 0, "clamp": 1, "black": 2}
+
+
+@wp.struct
+class Textures:
+    kind: wp.array(dtype=int)
+    scale: wp.array(dtype=wp.vec3)      # constant value, or multiplier of an image / checker tex1
+    alt: wp.array(dtype=wp.vec3)        # checkerboard tex2
+    uvmap: wp.array(dtype=wp.vec4)      # (su, sv, du, dv): st = (su u + du, sv v + dv)
+    image: wp.array(dtype=wp.vec4i)     # (pixel offset, width, height, wrap mode)
+    pixels: wp.array(dtype=wp.vec3)
+
+
+@wp.func
+def _texel(T: Textures, img: wp.vec4i, x: int, y: int) -> wp.vec3:
+    w = img[1]
+    h = img[2]
+    if img[3] == 0:
+        x = ((x % w) + w) % w
+        y = ((y % h) + h) % h
+    elif img[3] == 1:
+        x = wp.clamp(x, 0, w - 1)
+        y = wp.clamp(y, 0, h - 1)
+    elif x < 0 or y < 0 or x >= w or y >= h:
+        return wp.vec3(0.0)
+    return T.pixels[img[0] + y * w + x]
+
+
+@wp.func
+def _bilinear(T: Textures, img: wp.vec4i, st: wp.vec2) -> wp.vec3:
+    """Bilinear lookup; t is flipped as in pbrt-v4 so v = 0 is the image's bottom row."""
+    x = st[0] * float(img[1]) - 0.5
+    y = (1.0 - st[1]) * float(img[2]) - 0.5
+    x0 = wp.floor(x)
+    y0 = wp.floor(y)
+    fx = x - x0
+    fy = y - y0
+    ix = int(x0)
+    iy = int(y0)
+    a = _texel(T, img, ix, iy) * (1.0 - fx) + _texel(T, img, ix + 1, iy) * fx
+    b = _texel(T, img, ix, iy + 1) * (1.0 - fx) + _texel(T, img, ix + 1, iy + 1) * fx
+    return a * (1.0 - fy) + b * fy
+
+
+@wp.func
+def texture_eval(T: Textures, tid: int, uv: wp.vec2) -> wp.vec3:
+    """The texture's value at surface coordinates uv (float textures use the first channel)."""
+    k = T.kind[tid]
+    if k == CONSTANT:
+        return T.scale[tid]
+    m = T.uvmap[tid]
+    st = wp.vec2(uv[0] * m[0] + m[2], uv[1] * m[1] + m[3])
+    if k == CHECKERBOARD:
+        if (int(wp.floor(st[0])) + int(wp.floor(st[1]))) % 2 == 0:
+            return T.scale[tid]
+        return T.alt[tid]
+    return wp.cw_mul(T.scale[tid], _bilinear(T, T.image[tid], st))
+
+
+@dataclass
+class TextureTable:
+    """Host-side builder of the texture table; ``add_*`` return ids that materials store."""
+
+    kind: list[int] = field(default_factory=list)
+    scale: list[np.ndarray] = field(default_factory=list)
+    alt: list[np.ndarray] = field(default_factory=list)
+    uvmap: list[tuple[float, float, float, float]] = field(default_factory=list)
+    image: list[tuple[int, int, int, int]] = field(default_factory=list)
+    pixels: list[np.ndarray] = field(default_factory=list)
+    n_pixels: int = 0
+    named: dict[tuple[str, str], int] = field(default_factory=dict)
+    _image_cache: dict[tuple[Path, str], tuple[int, int, int]] = field(default_factory=dict)
+
+    def _add(self, kind: int, scale, alt=(0.0, 0.0, 0.0), uvmap=(1.0, 1.0, 0.0, 0.0), image=(0, 1, 1, 0)) -> int:
+        self.kind.append(kind)
+        self.scale.append(np.broadcast_to(np.asarray(scale, dtype=np.float32), (3,)))
+        self.alt.append(np.broadcast_to(np.asarray(alt, dtype=np.float32), (3,)))
+        self.uvmap.append(tuple(float(x) for x in uvmap))
+        self.image.append(tuple(int(x) for x in image))
+        return len(self.kind) - 1
+
+    def add_constant(self, value) -> int:
+        return self._add(CONSTANT, value)
+
+    def _load_image(self, path: Path, encoding: str, loc) -> tuple[int, int, int]:
+        from renderer.imageio import read_image
+
+        key = (path, encoding)
+        if key not in self._image_cache:
+            if not path.is_file():
+                raise MissingFileError(path, loc, "texture image")
+            try:
+                img = read_image(path, srgb=(encoding.lower() == "srgb"))
+            except Exception as e:  # unreadable or corrupt image: say which file
+                raise SceneError(f"cannot read texture image {path}: {e}", loc) from e
+            if encoding.startswith("gamma "):
+                img = np.power(np.clip(img, 0, None), float(encoding.split()[1]))
+            rgb = np.repeat(img[..., :1], 3, axis=2) if img.shape[2] < 3 else img[..., :3]
+            if not np.all(np.isfinite(rgb)):
+                raise SceneError(f"texture image {path} contains NaN or infinite values", loc)
+            h, w = rgb.shape[:2]
+            self._image_cache[key] = (self.n_pixels, w, h)
+            self.pixels.append(np.ascontiguousarray(rgb.reshape(-1, 3), dtype=np.float32))
+            self.n_pixels += w * h
+        return self._image_cache[key]
+
+    def add_described(self, desc: TextureDesc, textures: dict[str, TextureDesc]) -> int:
+        """Add a named texture from the scene (memoised, so materials sharing it share one record)."""
+        key = (desc.name, desc.value_type)
+        if key in self.named:
+            return self.named[key]
+        p = desc.params
+        uvmap = (p.float("uscale", 1.0), p.float("vscale", 1.0), p.float("udelta", 0.0), p.float("vdelta", 0.0))
+        mapping = p.string("mapping", "uv")
+        if mapping != "uv":
+            raise SceneError(f'texture mapping "{mapping}" is not supported (only "uv")', desc.loc)
+        getc = p.float if desc.value_type == "float" else p.rgb
+        if desc.kind == "constant":
+            tid = self.add_constant(getc("value", 1.0))
+        elif desc.kind == "imagemap":
+            fname = p.string("filename")
+            if not fname:
+                raise SceneError('imagemap texture needs "string filename"', desc.loc)
+            path = (desc.base_dir / fname).resolve()
+            default_enc = "linear" if path.suffix.lower() in (".exr", ".hdr", ".pfm") else "sRGB"
+            enc = p.string("encoding", default_enc)
+            wrap = p.string("wrap", "repeat")
+            if wrap not in WRAP:
+                raise SceneError(f'imagemap wrap must be one of {sorted(WRAP)}, got "{wrap}"', desc.loc)
+            off, w, h = self._load_image(path, enc, desc.loc)
+            s = p.float("scale", 1.0)
+            if p.bool("invert", False):
+                raise SceneError('imagemap "invert" is not supported', desc.loc)
+            p.string("filter")
+            tid = self._add(IMAGE, s, uvmap=uvmap, image=(off, w, h, WRAP[wrap]))
+        elif desc.kind == "checkerboard":
+            if p.int("dimension", 2) != 2:
+                raise SceneError("only 2D checkerboard textures are supported", desc.loc)
+            t1, t2 = getc("tex1", 1.0), getc("tex2", 0.0)
+            tid = self._add(CHECKERBOARD, t1, alt=t2, uvmap=uvmap)
+        elif desc.kind == "scale":
+            tid = self._scaled(desc, textures, getc)
+        else:
+            raise SceneError(f'texture class "{desc.kind}" is not supported', desc.loc)
+        self.named[key] = tid
+        return tid
+
+    def _scaled(self, desc: TextureDesc, textures: dict[str, TextureDesc], getc) -> int:
+        """pbrt's ``scale`` texture (tex × scale) where at most one factor is a texture: the
+        constant folds into that texture's multiplier."""
+        p = desc.params
+        tex_name, scale_name = p.texture("tex"), p.texture("scale")
+        if tex_name and scale_name:
+            raise SceneError("a scale texture of two textures is not supported", desc.loc)
+        name = tex_name or scale_name
+        if name is None:
+            return self.add_constant(np.asarray(getc("tex", 1.0)) * np.asarray(getc("scale", 1.0)))
+        const = np.asarray(getc("scale" if tex_name else "tex", 1.0), dtype=np.float32)
+        base = self.lookup(name, desc.value_type, textures, desc.loc)
+        self.kind.append(self.kind[base])
+        self.scale.append(self.scale[base] * const)
+        self.alt.append(self.alt[base] * const)
+        self.uvmap.append(self.uvmap[base])
+        self.image.append(self.image[base])
+        return len(self.kind) - 1
+
+    def lookup(self, name: str, value_type: str, textures: dict[str, TextureDesc], loc) -> int:
+        desc = textures.get(name)
+        if desc is None:
+            raise SceneError(f'unknown texture "{name}"', loc)
+        return self.add_described(desc, textures)
+
+    def upload(self, device: str) -> tuple[Textures, list]:
+        T = Textures()
+        n = max(1, len(self.kind))
+        pad = lambda a, shape: np.asarray(a, dtype=np.float32).reshape(shape) if len(a) else np.zeros(shape, np.float32)
+        T.kind = wp.array(np.asarray(self.kind or [0], dtype=np.int32), dtype=int, device=device)
+        T.scale = wp.array(pad(self.scale, (n, 3)), dtype=wp.vec3, device=device)
+        T.alt = wp.array(pad(self.alt, (n, 3)), dtype=wp.vec3, device=device)
+        T.uvmap = wp.array(pad(self.uvmap, (n, 4)), dtype=wp.vec4, device=device)
+        T.image = wp.array(np.asarray(self.image or [(0, 1, 1, 0)], dtype=np.int32), dtype=wp.vec4i, device=device)
+        pix = np.concatenate(self.pixels) if self.pixels else np.zeros((1, 3), np.float32)
+        T.pixels = wp.array(pix, dtype=wp.vec3, device=device)
+        return T, [T.kind, T.scale, T.alt, T.uvmap, T.image, T.pixels]
