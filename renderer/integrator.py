@@ -94,6 +94,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
             d = ray.d
             L = wp.vec3(0.0)
             beta = wp.vec3(1.0)
+            eta_scale = float(1.0)  # undoes the 1/eta^2 radiance scaling for Russian roulette
             prev_pdf = float(0.0)
             prev_specular = bool(True)
             prev_p = o
@@ -159,6 +160,9 @@ def integrator_kernel(features: Features) -> wp.Kernel:
                                 if b.kind == wp.static(kinds[j]):
                                     f = wp.static(mods[j].eval)(b, wo_l, wi_l)
                                     pdf_b = wp.static(mods[j].pdf)(b, wo_l, wi_l)
+                            # shading normals must not let light through the geometric surface
+                            if wp.dot(ls.wi, s.ng) * wi_l[2] <= 0.0:
+                                f = wp.vec3(0.0)
                             f = f * wp.abs(wi_l[2])
                             if max3(f) > 0.0:
                                 origin = offset_origin(s.p, s.ng, ls.wi)
@@ -178,7 +182,11 @@ def integrator_kernel(features: Features) -> wp.Kernel:
                 if bs.pdf <= 0.0:
                     break
                 beta = wp.cw_mul(beta, bs.weight)
+                if bs.eta > 0.0:
+                    eta_scale = eta_scale * bs.eta * bs.eta
                 wi = wp.normalize(to_world(frame, bs.wi))
+                if wp.dot(wi, s.ng) * bs.wi[2] <= 0.0:
+                    break  # the sample crossed the geometric surface on the wrong side (shading-normal leak)
                 prev_pdf = bs.pdf
                 prev_specular = bs.specular
                 prev_p = s.p
@@ -187,7 +195,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
                 depth += 1
                 u_rr = wp.randf(rng)
                 if depth >= RR_DEPTH:
-                    mb = max3(beta)
+                    mb = max3(beta) * eta_scale
                     if mb < 1.0:
                         q = wp.max(0.0, 1.0 - mb)
                         if u_rr < q:

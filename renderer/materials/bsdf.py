@@ -29,6 +29,7 @@ class BSDFSample:
     weight: wp.vec3         # f * |cos θi| / pdf
     pdf: float              # 0 means the sample failed; meaningless for delta lobes
     specular: bool          # a delta lobe: skip MIS, NEE cannot reach it
+    eta: float              # relative index crossed by a transmission (0 or 1: none)
 
 
 @wp.func

@@ -123,6 +123,7 @@ def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
             s.wi = wp.vec3(t[0], t[1], t[2])
             s.weight = wp.vec3(1.0 / (t[3] * t[3]))
             s.pdf = 1.0 - R
+            s.eta = t[3]
         s.specular = True
         return s
     wm = ggx_sample_visible(wo, alpha, wp.vec2(u[0], u[1]))
@@ -139,6 +140,7 @@ def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
         wi = wp.vec3(t[0], t[1], t[2])
         if wi[2] * wo[2] >= 0.0:
             return failed_sample()
+        s.eta = t[3]
     s.wi = wi
     s.pdf = pdf(b, wo, wi)
     if s.pdf <= 0.0:

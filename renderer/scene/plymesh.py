@@ -1,0 +1,68 @@
+"""pbrt's ``plymesh``: a PLY file (ASCII or binary) read with plyfile into a triangle mesh."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import plyfile
+
+from renderer.errors import Location, MissingFileError, SceneError
+from renderer.scene.description import MeshDesc
+from renderer.scene.params import ParamSet
+from renderer.scene.shapes import validated_mesh
+
+#: Vertex property pairs that exporters use for texture coordinates, in pbrt-v4's order of preference.
+UV_NAMES = (("u", "v"), ("s", "t"), ("texture_u", "texture_v"), ("texture_s", "texture_t"))
+
+
+def ply_mesh(params: ParamSet, loc: Location) -> MeshDesc:
+    """The mesh of ``"string filename"``, resolved against the folder of the file that names it."""
+    name = params.string("filename")
+    if not name:
+        raise SceneError('plymesh: "string filename" is required', loc)
+    path = Path(loc.file).parent / name
+    if not path.is_file():
+        raise MissingFileError(path, loc, "PLY mesh")
+    return read_ply(path, loc)
+
+
+def read_ply(path: Path, loc: Location) -> MeshDesc:
+    """Positions, optional nx/ny/nz normals and UVs; polygons are fanned into triangles (a quad
+    becomes (0, 1, 2), (0, 2, 3), which keeps its winding). Errors name the PLY file and ``loc``."""
+    try:
+        ply = plyfile.PlyData.read(str(path))
+    except (plyfile.PlyParseError, plyfile.PlyHeaderParseError, ValueError, OSError) as e:
+        raise SceneError(f"{path}: not a readable PLY file ({e})", loc) from e
+    if "vertex" not in ply:
+        raise SceneError(f'{path}: no "vertex" element', loc)
+    vertex = ply["vertex"].data
+    names = set(vertex.dtype.names or ())
+
+    def columns(*keys: str) -> np.ndarray | None:
+        return np.stack([vertex[k] for k in keys], -1).astype(np.float64) if names.issuperset(keys) else None
+
+    P = columns("x", "y", "z")
+    if P is None:
+        raise SceneError(f"{path}: vertices lack x, y, z", loc)
+    N = columns("nx", "ny", "nz")
+    UV = next((uv for keys in UV_NAMES if (uv := columns(*keys)) is not None), None)
+    F = _faces(ply, path, loc)
+    return validated_mesh(P, F, N, UV, loc, f"plymesh {path.name}")
+
+
+def _faces(ply: plyfile.PlyData, path: Path, loc: Location) -> np.ndarray:
+    if "face" not in ply:
+        return np.zeros((0, 3), dtype=np.int64)
+    face = ply["face"].data
+    key = next((k for k in ("vertex_indices", "vertex_index") if k in (face.dtype.names or ())), None)
+    if key is None:
+        raise SceneError(f'{path}: faces lack a "vertex_indices" list', loc)
+    polygons = face[key]
+    counts = np.fromiter((len(p) for p in polygons), dtype=np.int64, count=len(polygons))
+    if np.any(counts < 3):
+        raise SceneError(f"{path}: face {int(np.argmax(counts < 3))} has fewer than 3 vertices", loc)
+    triangles = []
+    for k in np.unique(counts):
+        group = np.stack(polygons[counts == k]).astype(np.int64)
+        triangles.extend(group[:, [0, i, i + 1]] for i in range(1, k - 1))
+    return np.concatenate(triangles) if triangles else np.zeros((0, 3), dtype=np.int64)

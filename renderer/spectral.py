@@ -1,0 +1,111 @@
+"""Spectrum → linear sRGB weights for the thin-film BSDF, from colour-science tables.
+
+The renderer carries RGB; wavelengths exist only inside the thin-film BSDF, which must turn a
+reflectance spectrum R(λ) into the RGB reflectance a D65-lit surface would show. The mapping is
+
+    XYZ = ∫ R(λ) D65(λ) (x̄, ȳ, z̄)(λ) dλ / ∫ D65(λ) ȳ(λ) dλ,      rgb = M_sRGB · XYZ,
+
+which is linear in R, so it collapses to per-wavelength weight vectors w(λ) = M (x̄, ȳ, z̄) D65 / ∫D65ȳ
+with rgb = ∫ R(λ) w(λ) dλ. D65 is sRGB's white, so a perfect mirror (R ≡ 1) must come out as
+(1, 1, 1). The CIE 1931 2° observer and CIE D65 integrate to xy within 1e-4 of sRGB's nominal white,
+so every discretisation below is renormalised per channel to make white exactly white; that
+diagonal correction is far below what a viewer can see.
+
+Tables come from colour-science (never typed by hand) and are cached; all wavelengths in nm.
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+LAMBDA_MIN_NM = 360.0
+LAMBDA_MAX_NM = 830.0
+TABLE_STEP_NM = 1.0
+
+# The seed's wavelengths, used directly as the R, G and B channels in the "rgb3" mode.
+RGB3_WAVELENGTHS_NM = (650.0, 510.0, 475.0)
+
+
+@lru_cache(maxsize=1)
+def _cie_tables() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(λ grid at 1 nm over [360, 830], x̄ȳz̄ (n, 3), D65 (n,), XYZ→linear-sRGB matrix), float64."""
+    import colour
+
+    shape = colour.SpectralShape(LAMBDA_MIN_NM, LAMBDA_MAX_NM, TABLE_STEP_NM)
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape)
+    d65 = colour.SDS_ILLUMINANTS["D65"].copy().align(shape)
+    lam = np.asarray(shape.wavelengths, dtype=np.float64)
+    matrix = np.asarray(colour.RGB_COLOURSPACES["sRGB"].matrix_XYZ_to_RGB, dtype=np.float64)
+    return lam, np.asarray(cmfs.values, np.float64), np.asarray(d65.values, np.float64), matrix
+
+
+def _unnormalised_rgb_density(wavelengths_nm: np.ndarray) -> np.ndarray:
+    """M (x̄, ȳ, z̄)(λ) D65(λ) at arbitrary λ (linear interpolation of the 1 nm tables; 0 outside)."""
+    lam, cmfs, d65, matrix = _cie_tables()
+    wl = np.asarray(wavelengths_nm, dtype=np.float64)
+    xyz = np.stack([np.interp(wl, lam, cmfs[:, c] * d65, left=0.0, right=0.0) for c in range(3)], axis=-1)
+    return xyz @ matrix.T
+
+
+def spectrum_to_rgb_weights(wavelengths_nm: np.ndarray, quadrature_weights_nm: np.ndarray | None = None) -> np.ndarray:
+    """Per-wavelength linear-sRGB weights w_i (shape (n, 3)) with rgb = Σ_i R(λ_i) w_i.
+
+    ``quadrature_weights_nm`` are the dλ each sample stands for (default: equal weights, as for
+    stratum midpoints). The weights include the quadrature and are renormalised so that
+    Σ_i w_i = (1, 1, 1) exactly: R ≡ 1 gives white for this set of wavelengths, whatever n is.
+    """
+    wl = np.atleast_1d(np.asarray(wavelengths_nm, dtype=np.float64))
+    q = np.ones_like(wl) if quadrature_weights_nm is None else np.broadcast_to(
+        np.asarray(quadrature_weights_nm, dtype=np.float64), wl.shape)
+    w = _unnormalised_rgb_density(wl) * q[:, None]
+    total = w.sum(axis=0)
+    if np.any(total <= 0.0):
+        raise ValueError("these wavelengths cannot represent white: some sRGB channel gets no weight")
+    return w / total
+
+
+def rgb_weight_table() -> tuple[np.ndarray, float, float]:
+    """(w (n, 3) float32 in 1/nm, λ of the first entry, step) on the 1 nm grid over [360, 830].
+
+    This is a density: rgb = ∫ R(λ) w(λ) dλ. It is normalised so that the integral of its
+    piecewise-linear interpolant (the trapezoid sum) is exactly (1, 1, 1). A kernel that jitters
+    one wavelength λ_i = 360 + (i + u) Δ in each of N strata of width Δ = 470/N, looks w up by
+    linear interpolation and sums R(λ_i) w(λ_i) Δ is therefore an unbiased estimator of rgb: for
+    R ≡ 1 its expectation over u ~ U[0, 1) is exactly white (one sample is white within the
+    stratification error, about 1e-3 at N = 32).
+    """
+    lam, _, _, _ = _cie_tables()
+    w = _unnormalised_rgb_density(lam)
+    trapezoid = TABLE_STEP_NM * (w.sum(axis=0) - 0.5 * (w[0] + w[-1]))
+    return (w / trapezoid).astype(np.float32), float(lam[0]), TABLE_STEP_NM
+
+
+def mode_wavelengths(mode: str) -> tuple[np.ndarray, np.ndarray, float]:
+    """(wavelengths (n,), RGB weights (n, 3), band width in nm each sample stands for) of a mode.
+
+    Modes: ``"rgb3"`` (the seed: R(650), R(510), R(475) used directly as R, G, B; monochromatic,
+    band 0), ``"spectral:N"`` (the N stratum midpoints of [360, 830], band = stratum width),
+    ``"reference"`` (every nm of [360, 830] with trapezoid weights, band 1 nm).
+    The band is how wide a slice of spectrum one sample represents; the thin-film code averages
+    the interference over it so thick films converge instead of aliasing.
+    """
+    span = LAMBDA_MAX_NM - LAMBDA_MIN_NM
+    if mode == "rgb3":
+        return np.asarray(RGB3_WAVELENGTHS_NM), np.eye(3), 0.0
+    if mode == "reference":
+        lam, _, _, _ = _cie_tables()
+        q = np.full_like(lam, TABLE_STEP_NM)
+        q[[0, -1]] *= 0.5
+        return lam, spectrum_to_rgb_weights(lam, q), TABLE_STEP_NM
+    if mode.startswith("spectral:"):
+        try:
+            n = int(mode.split(":", 1)[1])
+        except ValueError:
+            n = 0
+        if n < 1:
+            raise ValueError(f"spectral mode needs a positive sample count, got {mode!r}")
+        step = span / n
+        lam = LAMBDA_MIN_NM + (np.arange(n) + 0.5) * step
+        return lam, spectrum_to_rgb_weights(lam), step
+    raise ValueError(f"unknown thin-film mode {mode!r}: use 'rgb3', 'spectral:N' or 'reference'")
