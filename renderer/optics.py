@@ -22,14 +22,18 @@ Conventions, shared by every function here:
 Thick films. A sample at wavelength λ that stands for a band of width Δλ (a stratum of the
 spectral integral) should return the band average of R, not R(λ): otherwise, once the fringe
 spacing λ²/OPD drops below Δλ, a deterministic set of wavelengths aliases the fringes into false
-colour. Across the band the round-trip phase φ = 2π·OPD/λ spreads by W = 2π·OPD·Δλ/λ². Averaging the
-Airy function over φ damps its k-th Fourier harmonic; we damp the first harmonic (the only
-sizeable one for a film between dielectrics) by the Gaussian factor γ = exp(−W²/24), which has the
-box's variance W²/12, and write R = γ·R_coherent + (1 − γ)·R_incoherent, where the incoherent sum
-adds the intensities of the multiply reflected beams (the exact phase average). Physically this
-is light of coherence length ≈ λ²/Δλ: a 1 nm reference band means ≈ 300 µm, a 32-stratum sample
-≈ 20 µm, so a 100 µm film converges to the incoherent result in every spectral mode while films
-of a few µm keep their (pale, high-order) colours. Δλ = 0 is the exact monochromatic Airy formula.
+colour. Across the band the round-trip phase φ = 2π·OPD/λ spreads by W = 2π·OPD·Δλ/λ². The box
+average of the Airy function over that phase interval multiplies its k-th Fourier harmonic by
+sinc(kW/2); we apply the first harmonic's factor (the only sizeable one unless both interfaces
+reflect strongly) to the whole oscillating part: R = R_inc + γ·(R_coherent − R_inc), γ = sinc(W/2),
+where the incoherent sum R_inc adds the intensities of the multiply reflected beams (the exact
+phase average). γ is the box's own transfer function, not a smooth stand-in for it, because it
+has to vanish when a band spans a whole fringe: then midpoint samples of band averages integrate
+the fringes exactly, where a Gaussian of the same variance still lets 19 % through and aliases.
+Physically this is light of coherence length ≈ λ²/Δλ: a 1 nm reference band means ≈ 300 µm, a
+32-stratum sample ≈ 20 µm, so a 100 µm film converges to the incoherent result in every spectral
+mode while films of a few µm keep their (pale, high-order) colours. Δλ = 0 is the exact
+monochromatic Airy formula.
 
 ``fast_math`` stays off: round-trip phases reach 10^4 radians for thick films. The phase is
 reduced modulo one cycle before the cosine, so float32 keeps ~1e-3 rad of absolute phase accuracy.
@@ -241,6 +245,14 @@ def thin_film_interfaces(cos0: float, n0: float, n1: wp.vec2, n2: wp.vec2) -> Fi
 
 
 @wp.func
+def sinc(x: float) -> float:
+    """sin(x)/x, with its Taylor series where the quotient would lose precision."""
+    if wp.abs(x) < 1.0e-3:
+        return 1.0 - x * x / 6.0
+    return wp.sin(x) / x
+
+
+@wp.func
 def _airy(f: PolarisedFilm, e: wp.vec2, e_abs: float, coherence: float) -> wp.vec2:
     """(R, T) of one polarisation given the round-trip factor e = exp(2iβ) and its modulus."""
     den = wp.vec2(1.0, 0.0) + c_mul(f.r01, c_mul(f.r12, e))
@@ -254,8 +266,9 @@ def _airy(f: PolarisedFilm, e: wp.vec2, e_abs: float, coherence: float) -> wp.ve
     inv_inc = 1.0 / wp.max(1.0 - R01 * R12 * a, _TINY)
     r_inc = wp.min(R01 + f.t01t10_sq * R12 * a * inv_inc, 1.0)
     t_inc = wp.min(f.transmit_sq * e_abs * inv_inc, 1.0)
-    return wp.vec2(coherence * r_coh + (1.0 - coherence) * r_inc,
-                   coherence * t_coh + (1.0 - coherence) * t_inc)
+    # sinc's negative lobes can overshoot by a few % of the fringe contrast: stay physical.
+    return wp.vec2(wp.clamp(r_inc + coherence * (r_coh - r_inc), 0.0, 1.0),
+                   wp.clamp(t_inc + coherence * (t_coh - t_inc), 0.0, 1.0))
 
 
 @wp.func
@@ -266,8 +279,7 @@ def film_RT(f: FilmInterfaces, lambda_nm: float, d_nm: float, band_nm: float) ->
     phase = 2.0 * wp.pi * (cycles - wp.floor(cycles))
     e_abs = wp.exp(-4.0 * wp.pi * f.q1[1] * d_nm / lambda_nm)
     e = e_abs * c_expi(phase)
-    spread = 2.0 * wp.pi * cycles * band_nm / lambda_nm
-    coherence = wp.exp(-spread * spread / 24.0)
+    coherence = sinc(wp.pi * cycles * band_nm / lambda_nm)
     return 0.5 * (_airy(f.s, e, e_abs, coherence) + _airy(f.p, e, e_abs, coherence))
 
 
