@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 export WARP_CACHE_PATH ?= $(CURDIR)/.warp-cache
 SCENE ?= scenes/demo.pbrt
 OUT ?= out/demo.png
-SPP ?= 64
+SPP ?=
 
 .PHONY: render test install bench clean
 
@@ -21,7 +21,7 @@ install: $(VENV)/.installed
 
 render: install
 	@mkdir -p $(dir $(OUT))
-	$(BIN)/render $(SCENE) -o $(OUT) --spp $(SPP)
+	$(BIN)/render $(SCENE) -o $(OUT) $(if $(SPP),--spp $(SPP))
 
 test: install
 	$(BIN)/python -m pytest -q

@@ -72,6 +72,10 @@ def run_ours(res: int, spp: int, device: str, all_materials: bool) -> dict:
 
 
 def run_mitsuba(res: int, spp: int) -> list[dict]:
+    # Debian's default libLLVM 14/15 crashes Dr.Jit's LLVM backend; libllvm19 works
+    llvm19 = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
+    if "DRJIT_LIBLLVM_PATH" not in os.environ and os.path.exists(llvm19):
+        os.environ["DRJIT_LIBLLVM_PATH"] = llvm19
     try:
         import mitsuba as mi
     except ImportError:
@@ -115,15 +119,17 @@ def main() -> None:
     ap.add_argument("--res", type=int, default=256)
     ap.add_argument("--device", default="cpu")
     a = ap.parse_args()
-    rows = [run_ours(a.res, a.spp, a.device, False), run_ours(a.res, a.spp, a.device, True)]
-    rows += run_mitsuba(a.res, a.spp)
     print(f"\n{a.res}x{a.res}, {a.spp} spp, depth {DEPTH}, 82k-triangle sphere + floor, uniform sky\n")
     print("| renderer | seconds | M samples/s | first kernel load s (cold = compile) | vs ours diffuse-only |")
-    print("|---|---:|---:|---:|---:|")
-    base = rows[0]["samples_per_s"]
-    for r in rows:
-        print(f"| {r['name']} | {r['seconds']:.2f} | {r['samples_per_s'] / 1e6:.3f} | {r['load_s']:.2f} | "
-              f"{r['samples_per_s'] / base:.2f}x |")
+    print("|---|---:|---:|---:|---:|", flush=True)
+    base = None
+    runs = [lambda: [run_ours(a.res, a.spp, a.device, False)], lambda: [run_ours(a.res, a.spp, a.device, True)],
+            lambda: run_mitsuba(a.res, a.spp)]
+    for run in runs:
+        for r in run():
+            base = base or r["samples_per_s"]
+            print(f"| {r['name']} | {r['seconds']:.2f} | {r['samples_per_s'] / 1e6:.3f} | {r['load_s']:.2f} | "
+                  f"{r['samples_per_s'] / base:.2f}x |", flush=True)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,537 @@
+"""The parse + build stage: pbrt-v4 text -> SceneDescription, with every error located (no Warp)."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from renderer.errors import Location, MissingFileError, SceneError
+from renderer.scene import load_description
+from renderer.scene.builder import UNSUPPORTED
+from renderer.scene.params import Param, ParamSet
+from renderer.scene.shapes import bilinear_mesh, disk, sphere
+from renderer.scene.tokenizer import tokenize
+
+DATA = Path(__file__).parent / "data" / "scenes"
+HEAD = 'Camera "perspective"\nWorldBegin\n'          # two lines: scene text after it starts at line 3
+
+
+def write(tmp_path: Path, text: str, name: str = "scene.pbrt") -> Path:
+    path = tmp_path / name
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+    return path
+
+
+def load(tmp_path: Path, text: str):
+    return load_description(write(tmp_path, text))
+
+
+def error_at(tmp_path: Path, text: str, line: int, match: str, file: str = "scene.pbrt",
+             kind: type[SceneError] = SceneError) -> SceneError:
+    """Loading ``text`` fails with ``kind``, located at ``file``:``line``, message matching ``match``."""
+    path = write(tmp_path, text)
+    with pytest.raises(kind, match=match) as info:
+        load_description(path)
+    assert info.value.loc == Location(str(tmp_path / file), line), str(info.value)
+    assert str(info.value).startswith(f"{tmp_path / file}:{line}: ")
+    return info.value
+
+
+def params(**kw) -> ParamSet:
+    ps = ParamSet()
+    for k, v in kw.items():
+        ps.add(Param("float", k, [v], Location("<test>", 1)))
+    return ps
+
+
+# --- tokenizer -----------------------------------------------------------------------------------
+
+def test_tokens_values_kinds_and_lines():
+    text = 'Shape"sphere"[1 -2.5e1 .5 +3]# comment "not a string"\n\n  "a\\"b\\\\c\\n" true nan 4.5.6'
+    toks = list(tokenize(text, "f.pbrt"))
+    assert [(t.kind, t.value, t.loc.line) for t in toks] == [
+        ("word", "Shape", 1), ("string", "sphere", 1), ("[", "[", 1), ("number", 1, 1), ("number", -25.0, 1),
+        ("number", 0.5, 1), ("number", 3, 1), ("]", "]", 1), ("string", 'a"b\\c\n', 3), ("word", "true", 3),
+        ("word", "nan", 3), ("word", "4.5.6", 3)]
+    assert isinstance(toks[3].value, int) and isinstance(toks[4].value, float)
+    assert toks[0].loc.file == "f.pbrt"
+
+
+@pytest.mark.parametrize("text, line, match", [
+    ('\n"abc', 2, "unterminated string at end of file"),
+    ('"ab\nc"', 1, "may not span lines"),
+    ('\n\n"a\\qb"', 3, "unknown escape"),
+])
+def test_tokenizer_errors_are_located(text, line, match):
+    with pytest.raises(SceneError, match=match) as info:
+        list(tokenize(text, "t.pbrt"))
+    assert info.value.loc == Location("t.pbrt", line)
+
+
+# --- parser errors, each with file:line -------------------------------------------------------------
+
+@pytest.mark.parametrize("body, line, match", [
+    ('\n\nFrobnicate 1 2', 5, 'unknown directive "Frobnicate"'),
+    ('\n"sphere"', 4, "expected a directive"),
+    ('Shape "sphere"\n  "flaot radius" 1', 4, 'unknown parameter type "flaot"'),
+    ('Shape "sphere" "radius" 1', 3, "bad parameter declaration"),
+    ('Shape "sphere" "float radius"\nShape "disk"', 3, 'parameter "radius" has no value'),
+    ('Shape "sphere" "float radius"', 3, 'parameter "radius" has no value'),
+    ('Shape "sphere" "float radius" [ 1\n\nShape "disk" ]', 3, 'unterminated "\\["'),
+    ('Shape "sphere" "float radius" [ 1', 3, 'unterminated "\\["'),
+    ('Shape "sphere" "float radius" [ [ 1 ] ]', 3, 'unexpected "\\["'),
+    ('Shape "sphere" "float radius" ] 1', 3, "has no value"),
+    ('Shape "sphere" "float radius" [ 1 ] ]', 3, "expected a directive"),
+    ('Shape "sphere"\n "float radius" 1x', 4, 'expects numbers, found "1x"'),
+    ('Shape "trianglemesh" "integer indices" [0 1 2.0] "point3 P" [0 0 0 1 0 0 0 1 0]', 3, "expects integers"),
+    ('Shape "trianglemesh" "integer indices" [0 1 2] "point3 P" [0 0 0 1 0 0 0 1]', 3, "multiple of 3"),
+    ('Shape "sphere" "string radius" 1', 3, "expects a quoted string"),
+    ('Shape "sphere" "bool radius" "maybe"', 3, "true or false"),
+    ('Translate 1 2\nShape "sphere"', 3, "Translate needs 3 numbers, got 2"),
+    ('\nTranslate 1 2 zz', 4, 'Translate: bad number "zz"'),
+    ('Shape sphere', 3, "expects a quoted string"),
+    ('Shape "sphere" "float radius" 1 "float radius" 2', 3, "given twice"),
+])
+def test_syntax_errors_name_file_and_line(tmp_path, body, line, match):
+    error_at(tmp_path, HEAD + body, line, match)
+
+
+def test_unexpected_end_of_file_is_located(tmp_path):
+    error_at(tmp_path, HEAD + "Texture \"t\" \"float\"", 3, "unexpected end of file")
+
+
+# --- includes ------------------------------------------------------------------------------------
+
+def test_include_resolves_against_the_including_file_and_is_textual(tmp_path):
+    write(tmp_path, 'Translate 0 0 2\nShape "sphere"\nInclude "deeper/c.pbrt"\n', "parts/b.pbrt")
+    write(tmp_path, 'Shape "disk"\n', "parts/deeper/c.pbrt")
+    s = load(tmp_path, HEAD + 'Include "parts/b.pbrt"\nShape "sphere"\n')
+    assert [m.name for m in s.meshes] == ["sphere", "disk", "sphere"]
+    assert s.shapes[1].loc == Location(str(tmp_path / "parts/deeper/c.pbrt"), 1)
+    # the Translate inside the include stays in effect after it, as in pbrt
+    assert s.instance_sets[2].transforms[0][2, 3] == 2.0
+
+
+def test_errors_inside_an_include_name_the_included_file(tmp_path):
+    write(tmp_path, '# comment\n\nShape "sphere" "float radius" -1\n', "inc/bad.pbrt")
+    error_at(tmp_path, HEAD + 'Include "inc/bad.pbrt"', 3, "radius must be > 0", file="inc/bad.pbrt")
+
+
+def test_missing_include_is_located_at_the_include_line(tmp_path):
+    e = error_at(tmp_path, HEAD + '\nImport "nothere.pbrt"', 4, "not found", kind=MissingFileError)
+    assert e.path == tmp_path / "nothere.pbrt"
+
+
+def test_include_cycle_is_an_error(tmp_path):
+    write(tmp_path, 'Include "scene.pbrt"\n', "loop.pbrt")
+    error_at(tmp_path, HEAD + 'Include "loop.pbrt"', 1, "include cycle", file="loop.pbrt")
+
+
+def test_missing_scene_file():
+    with pytest.raises(MissingFileError):
+        load_description("/nonexistent/scene.pbrt")
+
+
+# --- transforms ----------------------------------------------------------------------------------
+
+def test_lookat_matches_pbrt_construction(tmp_path):
+    s = load(tmp_path, 'LookAt 1 2 3  1 2 10  0 1 0\nCamera "perspective" "float fov" 45\nWorldBegin\n')
+    # dir = +z, right = cross(up, dir) = +x, up' = cross(dir, right) = +y; origin at the eye
+    expect = np.array([[1, 0, 0, 1], [0, 1, 0, 2], [0, 0, 1, 3], [0, 0, 0, 1]], float)
+    np.testing.assert_allclose(s.camera.camera_to_world, expect, atol=1e-12)
+    assert s.camera.fov_deg == 45.0
+
+    # raster convention (pbrt's, and the camera kernel's): camera +x is image right, +y image up,
+    # so with this LookAt a point at world +x lands in the right half of the image
+    p = np.linalg.inv(s.camera.camera_to_world) @ [1 + 0.5, 2, 3 + 4, 1]
+    width, height, t = 200, 100, math.tan(math.radians(45) / 2)
+    px = (p[0] / p[2] / (t * width / height) + 1) / 2 * width
+    py = (1 - p[1] / p[2] / t) / 2 * height
+    assert px > width / 2 and py == pytest.approx(height / 2)
+
+    # looking down -x from the origin with +z up: right = cross(z, -x) = -y, up' = cross(-x, -y) = +z
+    s = load(tmp_path, 'LookAt 0 0 0  -1 0 0  0 0 1\nCamera "perspective"\nWorldBegin\n')
+    np.testing.assert_allclose(s.camera.camera_to_world[:3, :3], [[0, 0, -1], [-1, 0, 0], [0, 1, 0]], atol=1e-12)
+
+
+def test_transform_order_rotate_and_matrices(tmp_path):
+    s = load(tmp_path, HEAD + 'Translate 1 2 3\nScale 2 2 2\nRotate 90 0 0 1\nShape "sphere"\n')
+    m = s.instance_sets[0].transforms[0]
+    # the last directive acts first: x -> (rotate) y -> (scale) 2y -> (translate) (1, 4, 3)
+    np.testing.assert_allclose(m @ [1, 0, 0, 1], [1, 4, 3, 1], atol=1e-12)
+
+    a = load(tmp_path, HEAD + 'Transform [1 0 0 0  0 1 0 0  0 0 1 0  5 6 7 1]\nShape "sphere"\n')
+    np.testing.assert_allclose(a.instance_sets[0].transforms[0][:3, 3], [5, 6, 7])
+    b = load(tmp_path, HEAD + 'Translate 9 9 9\nIdentity\nConcatTransform [1 0 0 0  0 1 0 0  0 0 1 0  5 6 7 1]\n'
+                              'Shape "sphere"\n')
+    np.testing.assert_array_equal(a.instance_sets[0].transforms, b.instance_sets[0].transforms)
+    c = load(tmp_path, HEAD + 'Translate 1 0 0\nConcatTransform [0 1 0 0  -1 0 0 0  0 0 1 0  0 0 0 1]\n'
+                              'Shape "sphere"\n')
+    # the matrix's first four numbers are its first column: x -> y, then translate
+    np.testing.assert_allclose(c.instance_sets[0].transforms[0] @ [1, 0, 0, 1], [1, 1, 0, 1], atol=1e-12)
+
+
+def test_motion_blur_keeps_the_shutter_open_transform(tmp_path):
+    s = load(tmp_path, HEAD + 'TransformTimes 0 1\nActiveTransform EndTime\nTranslate 5 0 0\n'
+                              'ActiveTransform All\nTranslate 0 1 0\nShape "sphere"\n')
+    np.testing.assert_allclose(s.instance_sets[0].transforms[0][:3, 3], [0, 1, 0])
+    assert [w.split(": ")[1] for w in s.warnings] == ["TransformTimes", "ActiveTransform", "ActiveTransform"]
+    error_at(tmp_path, HEAD + "ActiveTransform Sometimes", 3, "StartTime, EndTime or All")
+
+
+def test_coordinate_systems_and_camera_space(tmp_path):
+    s = load(tmp_path, 'LookAt 0 0 -4  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\nTranslate 5 0 0\n'
+                       'CoordinateSystem "here"\nIdentity\nAttributeBegin\nCoordSysTransform "camera"\n'
+                       'Shape "sphere"\nAttributeEnd\nCoordSysTransform "here"\nShape "disk"\n'
+                       'CoordSysTransform "nowhere"\n')
+    np.testing.assert_allclose(s.instance_sets[0].transforms[0], s.camera.camera_to_world)
+    np.testing.assert_allclose(s.instance_sets[1].transforms[0][:3, 3], [5, 0, 0])
+    assert any(w.endswith('no coordinate system named "nowhere"; ignored (as pbrt does)') for w in s.warnings)
+
+
+def test_distant_light_direction_points_to_the_light_through_the_ctm(tmp_path):
+    s = load(tmp_path, HEAD + 'Rotate 90 1 0 0\nLightSource "distant" "point3 from" [0 0 5] "point3 to" [0 0 0]'
+                              ' "rgb L" [1 2 3] "float scale" 2 "float angularradius" 0.5\n'
+                              'LightSource "distant"\n')
+    a, b = s.distant_lights
+    np.testing.assert_allclose(a.direction, [0, -1, 0], atol=1e-12)      # Rx(90) maps +z to -y
+    np.testing.assert_allclose(a.L, [2, 4, 6])
+    assert a.angular_radius_deg == 0.5
+    np.testing.assert_allclose(b.direction, [0, 1, 0], atol=1e-12)       # default from - to = -z
+
+
+def test_infinite_light_defaults_and_image(tmp_path):
+    (tmp_path / "sky.exr").write_bytes(b"")
+    s = load(tmp_path, HEAD + 'LightSource "infinite"\nLightSource "infinite" "string filename" "sky.exr" '
+                              '"float scale" 3 "float illuminance" 5\n')
+    a, b = s.infinite_lights
+    np.testing.assert_allclose(a.L, [1, 1, 1])
+    assert a.filename is None and b.filename == tmp_path / "sky.exr"
+    np.testing.assert_allclose(b.L, [3, 3, 3])
+    assert s.warnings == [f'{tmp_path / "scene.pbrt"}:4: LightSource "infinite": parameter "float illuminance" '
+                          'is not supported and was ignored']
+    error_at(tmp_path, HEAD + 'LightSource "infinite" "string filename" "gone.exr"', 3, "not found",
+             kind=MissingFileError)
+    error_at(tmp_path, HEAD + 'LightSource "infinite" "string filename" "sky.exr" "rgb L" [1 1 1]', 3, "not both")
+
+
+# --- graphics state --------------------------------------------------------------------------------
+
+def test_attribute_blocks_restore_state(tmp_path):
+    s = load(tmp_path, HEAD + 'Material "conductor"\n'
+                              'AttributeBegin\n  Translate 0 1 0\n  Material "dielectric"\n  ReverseOrientation\n'
+                              '  AreaLightSource "diffuse" "blackbody L" 3000 "bool twosided" true\n'
+                              '  Shape "sphere"\nAttributeEnd\nShape "sphere"\n'
+                              'TransformBegin\n  Translate 7 0 0\n  Material "diffuse"\nTransformEnd\nShape "disk"\n')
+    inside, after, last = s.shapes
+    assert s.materials[inside.material].kind == "dielectric" and s.materials[after.material].kind == "conductor"
+    assert inside.reverse_orientation and not after.reverse_orientation
+    assert inside.area_light.two_sided and after.area_light is None
+    np.testing.assert_allclose(inside.area_light.L @ [0.2126, 0.7152, 0.0722], 1.0, rtol=1e-3)  # luminance 1
+    np.testing.assert_allclose(s.instance_sets[1].transforms[0], np.eye(4))
+    # TransformBegin/End restores only the transform
+    np.testing.assert_allclose(s.instance_sets[2].transforms[0], np.eye(4))
+    assert s.materials[last.material].kind == "diffuse"
+
+
+@pytest.mark.parametrize("body, line, match", [
+    ("AttributeEnd", 3, "AttributeEnd without a matching AttributeBegin"),
+    ("TransformBegin\nAttributeEnd", 4, "closes the TransformBegin at .*:3"),
+    ('\nAttributeBegin\nShape "sphere"', 4, "AttributeBegin is never closed"),
+    ('ObjectBegin "a"\nAttributeEnd', 4, "closes the ObjectBegin"),
+    ("ObjectEnd", 3, "ObjectEnd without a matching ObjectBegin"),
+])
+def test_mismatched_blocks_are_located(tmp_path, body, line, match):
+    error_at(tmp_path, HEAD + body, line, match)
+
+
+def test_mirroring_transform_flips_orientation_as_pbrt(tmp_path):
+    s = load(tmp_path, HEAD + 'Scale -1 1 1\nShape "sphere"\nReverseOrientation\nShape "sphere"\n')
+    assert [sh.reverse_orientation for sh in s.shapes] == [True, False]
+
+
+def test_options_and_world_order(tmp_path):
+    error_at(tmp_path, 'Shape "sphere"\nWorldBegin\n', 1, "must come after WorldBegin")
+    error_at(tmp_path, 'WorldBegin\n\nFilm "rgb"\n', 3, "must come before WorldBegin")
+    error_at(tmp_path, 'WorldBegin\nWorldBegin\n', 2, "twice")
+    path = write(tmp_path, 'Camera "perspective"\n')
+    with pytest.raises(SceneError, match="no WorldBegin"):
+        load_description(path)
+
+
+def test_defaults_without_options(tmp_path):
+    s = load(tmp_path, 'WorldBegin\nShape "sphere"\n')
+    np.testing.assert_array_equal(s.camera.camera_to_world, np.eye(4))
+    assert (s.camera.fov_deg, s.camera.lens_radius, s.camera.focal_distance) == (90.0, 0.0, 1e6)
+    assert (s.film.width, s.film.height, s.film.filename) == (1280, 720, "pbrt.exr")
+    assert (s.sampler.kind, s.sampler.spp, s.sampler.seed) == ("independent", 16, 0)
+    assert (s.integrator.kind, s.integrator.max_depth) == ("path", 5)
+    # the default material appears once, lazily: diffuse, reflectance 0.5
+    assert len(s.materials) == 1 and s.materials[0].kind == "diffuse"
+    np.testing.assert_allclose(s.materials[0].params.rgb("reflectance"), [0.5] * 3)
+    assert s.warnings == []
+
+
+@pytest.mark.parametrize("text, line, match", [
+    ('Camera "perspective" "float fov" 180\nWorldBegin', 1, "fov"),
+    ('\nCamera "orthographic"\nWorldBegin', 2, 'Camera "orthographic" is not supported'),
+    ('Camera "pinhole"\nWorldBegin', 1, 'unknown Camera "pinhole"'),
+    ('Scale 0 1 1\nCamera "perspective"\nWorldBegin', 2, "singular"),
+    ('LookAt 0 0 0  0 1 0  0 1 0\nWorldBegin', 1, "parallel"),
+    (HEAD + 'Shape "curve" "point3 P" [0 0 0 1 1 1 2 2 2 3 3 3]', 3, 'Shape "curve" is not supported'),
+    (HEAD + 'LightSource "spot"', 3, 'LightSource "spot" is not supported'),
+    (HEAD + 'LightSource "point"', 3, 'LightSource "point" is not supported'),
+    (HEAD + 'Material "measured"', 3, 'Material "measured" is not supported'),
+    (HEAD + 'MediumInterface "fog" ""', 3, "MediumInterface is not supported"),
+    (HEAD + 'AreaLightSource "spot"', 3, 'unknown AreaLightSource'),
+    (HEAD + 'NamedMaterial "nope"', 3, 'no material named "nope"'),
+    (HEAD + 'MakeNamedMaterial "m" "string type" "diffuse"\nMakeNamedMaterial "m" "string type" "diffuse"', 4,
+     "defined twice"),
+    (HEAD + 'MakeNamedMaterial "m" "float roughness" 0', 3, '"string type" is required'),
+    (HEAD + 'Texture "t" "color" "constant"', 3, 'must be "float" or "spectrum"'),
+    (HEAD + 'Texture "t" "float" "constant"\nTexture "t" "float" "constant"', 4, "defined twice"),
+    (HEAD + 'Rotate 10 0 0 0', 3, "zero length"),
+])
+def test_semantic_errors_are_located(tmp_path, text, line, match):
+    error_at(tmp_path, text, line, match)
+
+
+def test_unsupported_things_and_unused_parameters_warn_with_location(tmp_path):
+    s = load(tmp_path, 'Film "gbuffer" "integer xresolution" 32 "float iso" 100\n'
+                       'Sampler "stratified" "integer xsamples" 2 "integer ysamples" 3\n'
+                       'Integrator "bdpt" "integer maxdepth" 3\nPixelFilter "gaussian"\nColorSpace "aces2065-1"\n'
+                       'MakeNamedMedium "fog" "string type" "homogeneous"\nMediumInterface "" ""\n'
+                       'WorldBegin\nShape "sphere" "float radius" 2 "float alpha" 0.5\n'
+                       'Attribute "shape" "float radius" 3\n')
+    f = tmp_path / "scene.pbrt"
+    assert s.warnings == [
+        f'{f}:1: Film "gbuffer": rendered as an "rgb" film',
+        f'{f}:1: Film "gbuffer": parameter "float iso" is not supported and was ignored',
+        f"{f}:2: Sampler \"stratified\": sampled with this renderer's Sobol sampler",
+        f'{f}:3: Integrator "bdpt": rendered with the "path" integrator',
+        f'{f}:4: PixelFilter "gaussian": pixel filters are not implemented; samples are box-filtered',
+        f"{f}:5: ColorSpace: colours are always linear sRGB",
+        f"{f}:6: MakeNamedMedium: {UNSUPPORTED[('MakeNamedMedium', '*')][1]}",
+        f'{f}:9: Shape "sphere": parameter "float alpha" is not supported and was ignored',
+        f"{f}:10: Attribute: default parameters set by Attribute are ignored",
+    ]
+    assert (s.film.width, s.sampler.spp, s.sampler.kind, s.integrator.max_depth) == (32, 6, "sobol", 3)
+
+
+def test_unsupported_table_is_well_formed():
+    assert all(action in ("warn", "error") and reason for action, reason in UNSUPPORTED.values())
+
+
+# --- materials and textures ------------------------------------------------------------------------
+
+def test_named_materials_textures_and_interface(tmp_path):
+    s = load(tmp_path, HEAD + 'Texture "bumps" "float" "imagemap" "string filename" "h.png"\n'
+                              'MakeNamedMaterial "gold" "string type" "conductor" "texture displacement" "bumps"\n'
+                              'Material "interface"\nShape "sphere"\nNamedMaterial "gold"\nShape "disk"\n'
+                              'Material ""\nShape "disk"\n')
+    tex = s.textures["bumps"]
+    assert (tex.value_type, tex.kind, tex.base_dir) == ("float", "imagemap", tmp_path)
+    assert tex.params.string("filename") == "h.png"
+    gold = s.materials[s.shapes[1].material]
+    assert (gold.kind, gold.name) == ("conductor", "gold")
+    assert "displacement" in gold.params and not gold.params.params["displacement"].used
+    assert [s.materials[sh.material].kind for sh in s.shapes] == ["interface", "conductor", "interface"]
+    assert s.warnings == []                              # material params are left to the device stage
+
+
+# --- shapes -----------------------------------------------------------------------------------------
+
+def test_sphere_tessellation_is_radial_and_has_the_right_area():
+    m = sphere(params(radius=2.0), Location("<t>", 1))
+    P, N = m.positions.astype(float), m.normals.astype(float)
+    np.testing.assert_allclose(np.linalg.norm(N, axis=1), 1.0, atol=1e-6)
+    np.testing.assert_allclose(N, P / 2.0, atol=1e-6)
+    tri = P[m.indices]
+    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    assert abs(0.5 * np.linalg.norm(cross, axis=1).sum() / (4 * math.pi * 4) - 1) < 0.01
+    assert np.all(np.einsum("ij,ij->i", cross, tri.mean(1)) > 0)             # wound outwards
+    # pbrt's UVs: u = phi / 2pi, v = 0 at z = -r and 1 at z = +r
+    phi = np.mod(np.arctan2(P[:, 1], P[:, 0]), 2 * math.pi)
+    side = np.abs(P[:, 2]) < 1.9
+    ok = np.isclose(m.uvs[side, 0] * 2 * math.pi, phi[side], atol=1e-4) | np.isclose(m.uvs[side, 0], 1.0)
+    assert ok.all()
+    np.testing.assert_allclose(m.uvs[:, 1], (np.arccos(-P[:, 2] / 2).clip(0, math.pi)) / math.pi, atol=1e-3)
+
+
+def test_partial_sphere_and_disk_conventions():
+    m = sphere(params(radius=1.0, zmin=0.0, phimax=90.0), Location("<t>", 1))
+    assert m.positions[:, 2].min() >= -1e-6 and m.positions[:, :2].min() >= -1e-6
+    d = disk(params(radius=2.0, innerradius=1.0, height=0.5), Location("<t>", 1))
+    P = d.positions.astype(float)
+    r = np.linalg.norm(P[:, :2], axis=1)
+    np.testing.assert_allclose(P[:, 2], 0.5)
+    np.testing.assert_allclose(d.uvs[:, 1], (2.0 - r) / (2.0 - 1.0), atol=1e-6)   # v = 0 on the rim
+    np.testing.assert_allclose(d.normals, np.tile([0, 0, 1], (len(P), 1)))
+    tri = P[d.indices]
+    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    assert np.all(cross[:, 2] > 0)
+    assert abs(0.5 * cross[:, 2].sum() / (math.pi * 3) - 1) < 0.01
+    full = disk(params(radius=1.0), Location("<t>", 1))
+    assert abs(0.5 * np.cross(*(full.positions[full.indices][:, 1:] - full.positions[full.indices][:, :1])
+                              .transpose(1, 0, 2))[:, 2].sum() / math.pi - 1) < 0.01
+
+
+def test_bilinear_mesh_planar_and_curved():
+    loc = Location("<t>", 1)
+    ps = ParamSet()
+    ps.add(Param("point3", "P", [0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0], loc))
+    flat = bilinear_mesh(ps, loc)
+    assert len(flat.indices) == 2
+    np.testing.assert_allclose(flat.normals, np.tile([0, 0, 1], (4, 1)))
+    np.testing.assert_allclose(flat.uvs, flat.positions[:, :2])              # (u, v) where p = (u, v, 0)
+    ps = ParamSet()
+    ps.add(Param("point3", "P", [0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 1], loc))
+    curved = bilinear_mesh(ps, loc)
+    assert len(curved.indices) > 2
+    u, v = curved.uvs[:, 0].astype(float), curved.uvs[:, 1].astype(float)
+    np.testing.assert_allclose(curved.positions[:, 2], u * v, atol=1e-6)      # p(u, v) = (u, v, uv)
+    n = np.stack([-v, -u, np.ones_like(u)], 1)                              # cross(dp/du, dp/dv)
+    np.testing.assert_allclose(curved.normals, n / np.linalg.norm(n, axis=1, keepdims=True), atol=1e-3)
+
+
+def test_trianglemesh_and_validation(tmp_path):
+    s = load(tmp_path, HEAD + 'Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "float uv" [0 0 1 0 0 1]\n'
+                              'Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "integer indices" []\n')
+    assert s.meshes[0].indices.tolist() == [[0, 1, 2]] and s.meshes[0].uvs.shape == (3, 2)
+    assert len(s.meshes) == 1 and s.warnings == [f'{tmp_path / "scene.pbrt"}:4: Shape "trianglemesh" has no '
+                                                 'triangles; skipped']
+    error_at(tmp_path, HEAD + '\nShape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "integer indices" [0 1 3]',
+             4, "out of range")
+    error_at(tmp_path, HEAD + 'Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0 1 1 1]', 3, "indices")
+    error_at(tmp_path, HEAD + 'Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "normal N" [0 0 1]', 3,
+             "N has 1 entries for 3 vertices")
+    error_at(tmp_path, HEAD + 'Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "point3 uv" [0 0 1]', 3,
+             "must be of type")
+    error_at(tmp_path, HEAD + 'Shape "sphere" "float radius" 0', 3, "radius must be > 0")
+    error_at(tmp_path, HEAD + 'Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 1e39]', 3, "NaN or infinite")
+
+
+def _ply(path: Path, header_props: str, vertices: str, faces: str, n_vertices: int, n_faces: int) -> None:
+    path.write_text(f"ply\nformat ascii 1.0\nelement vertex {n_vertices}\n{header_props}"
+                    f"element face {n_faces}\nproperty list uchar int vertex_indices\nend_header\n"
+                    f"{vertices}{faces}")
+
+
+def test_plymesh_normals_uvs_and_quads(tmp_path):
+    s = load_description(DATA / "mini.pbrt")
+    m = s.meshes[0]
+    assert m.name == "plymesh quad.ply"
+    assert m.indices.tolist() == [[0, 1, 2], [0, 2, 3], [1, 4, 2]]           # quad split, winding kept
+    np.testing.assert_allclose(m.normals, np.tile([0, 0, 1], (5, 1)))
+    np.testing.assert_allclose(m.uvs[:4], m.positions[:4, :2])
+    np.testing.assert_allclose(m.uvs[4], [0.5, 0.5])
+
+    xyz = "property float x\nproperty float y\nproperty float z\n"
+    _ply(tmp_path / "uv.ply", xyz + "property float u\nproperty float v\n",
+         "0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n", "3 0 1 2\n", 3, 1)
+    _ply(tmp_path / "nan.ply", xyz, "0 0 0\nnan 0 0\n0 1 0\n", "3 0 1 2\n", 3, 1)
+    _ply(tmp_path / "oob.ply", xyz, "0 0 0\n1 0 0\n0 1 0\n", "3 0 1 7\n", 3, 1)
+    s = load(tmp_path, HEAD + 'Shape "plymesh" "string filename" "uv.ply" "float edgelength" 1\n')
+    np.testing.assert_allclose(s.meshes[0].uvs, [[0, 0], [1, 0], [0, 1]])
+    assert s.meshes[0].normals is None
+    assert s.warnings[0].startswith(f"{tmp_path / 'scene.pbrt'}:3: ")
+    error_at(tmp_path, HEAD + '\nShape "plymesh" "string filename" "nan.ply"', 4, "NaN")
+    error_at(tmp_path, HEAD + 'Shape "plymesh" "string filename" "oob.ply"', 3, "out of range")
+    error_at(tmp_path, HEAD + 'Shape "plymesh" "string filename" "none.ply"', 3, "not found", kind=MissingFileError)
+    (tmp_path / "junk.ply").write_text("not a ply\n")
+    error_at(tmp_path, HEAD + 'Shape "plymesh" "string filename" "junk.ply"', 3, "not a readable PLY")
+
+
+# --- objects and instancing -------------------------------------------------------------------------
+
+def test_object_instances_share_meshes(tmp_path):
+    s = load(tmp_path, HEAD + 'AttributeBegin\nTranslate 10 0 0\nObjectBegin "grain"\n'
+                              '  Translate 0 1 0\n  Shape "sphere" "float radius" 0.5\n  Shape "disk"\nObjectEnd\n'
+                              'AttributeEnd\nObjectInstance "grain"\nTranslate 0 0 4\nObjectInstance "grain"\n'
+                              'Scale -1 1 1\nObjectInstance "grain"\n')
+    assert len(s.meshes) == 2
+    plain = s.instance_sets[:2]
+    assert [i.shapes for i in plain] == [[0, 1], [0, 1]]
+    # world = ctm_instance @ ctm_shape, as pbrt-v4, where ctm_shape includes the CTM at ObjectBegin;
+    # the stored mesh is relative to ObjectBegin, so its vertices stay near the object's origin
+    sphere_top = s.meshes[0].positions[s.meshes[0].positions[:, 2].argmax()].astype(float)
+    np.testing.assert_allclose(sphere_top, [0, 1, 0.5], atol=1e-6)
+    for inst, offset in zip(plain, ([10, 1, 0], [10, 1, 4])):
+        world = inst.transforms[0] @ [*sphere_top, 1]
+        np.testing.assert_allclose(world[:3], np.array(offset) + [0, 0, 0.5], atol=1e-6)
+    # a mirroring instance uses flipped copies of the shapes, still with the same meshes
+    mirrored = s.instance_sets[2]
+    assert [s.shapes[i].mesh for i in mirrored.shapes] == [0, 1]
+    assert all(s.shapes[i].reverse_orientation for i in mirrored.shapes)
+    assert len(s.shapes) == 4
+
+
+def test_instance_transform_file(tmp_path):
+    T = np.tile(np.eye(4), (3, 1, 1))
+    T[:, 0, 3] = [0, 1, 2]
+    np.savez(tmp_path / "grains.npz", transforms=T)
+    np.save(tmp_path / "grains.npy", T[:2])
+    s = load(tmp_path, HEAD + 'ObjectBegin "g"\nShape "sphere"\nObjectEnd\nTranslate 0 5 0\n'
+                              'ObjectInstance "g" "string transforms" "grains.npz"\n'
+                              'ObjectInstance "g" "string transforms" "grains.npy"\n')
+    a, b = s.instance_sets
+    assert len(s.meshes) == 1 and a.shapes == b.shapes == [0]
+    np.testing.assert_allclose(a.transforms[:, :3, 3], [[0, 5, 0], [1, 5, 0], [2, 5, 0]])
+    assert b.transforms.shape == (2, 4, 4)
+
+    bad = np.zeros((2, 3, 4))
+    np.savez(tmp_path / "bad.npz", transforms=bad)
+    np.savez(tmp_path / "nokey.npz", other=T)
+    T[1, 2, 2] = np.nan
+    np.save(tmp_path / "nan.npy", T)
+    obj = HEAD + 'ObjectBegin "g"\nShape "sphere"\nObjectEnd\n'
+    error_at(tmp_path, obj + 'ObjectInstance "g" "string transforms" "bad.npz"', 6, r"shape \(N, 4, 4\)")
+    error_at(tmp_path, obj + 'ObjectInstance "g" "string transforms" "nokey.npz"', 6, 'no array named "transforms"')
+    error_at(tmp_path, obj + 'ObjectInstance "g" "string transforms" "nan.npy"', 6, "NaN")
+    error_at(tmp_path, obj + 'ObjectInstance "g" "string transforms" "gone.npz"', 6, "not found",
+             kind=MissingFileError)
+
+
+@pytest.mark.parametrize("body, line, match", [
+    ('ObjectBegin "a"\nAreaLightSource "diffuse"\nShape "sphere"\nObjectEnd', 5, "area lights inside"),
+    ('ObjectBegin "a"\nObjectBegin "b"', 4, "inside another object"),
+    ('ObjectBegin "a"\nObjectEnd\nObjectBegin "a"', 5, "defined twice"),
+    ('ObjectInstance "ghost"', 3, 'no object named "ghost"'),
+    ('ObjectBegin "a"\nObjectInstance "a"', 4, "inside an object definition"),
+])
+def test_object_errors_are_located(tmp_path, body, line, match):
+    error_at(tmp_path, HEAD + body, line, match)
+
+
+# --- a whole scene ------------------------------------------------------------------------------------
+
+def test_mini_scene_round_trip():
+    s = load_description(DATA / "mini.pbrt")
+    assert s.path == DATA / "mini.pbrt"
+    assert (s.film.width, s.film.height, s.film.filename) == (64, 48, "mini.exr")
+    assert (s.sampler.kind, s.sampler.spp) == ("sobol", 8)
+    assert (s.integrator.kind, s.integrator.max_depth) == ("path", 7)
+    np.testing.assert_allclose(s.camera.camera_to_world[:3, 3], [0, 1, -5])
+    np.testing.assert_allclose(s.camera.camera_to_world[:3, 2], np.array([0, -1, 5]) / math.sqrt(26))
+    assert s.camera.fov_deg == 40
+    assert [m.kind for m in s.materials] == ["dielectric", "diffuse", "diffuse"]
+    assert s.materials[1].params.texture("reflectance") == "checks" and "checks" in s.textures
+    assert len(s.infinite_lights) == 1 and len(s.distant_lights) == 1
+    np.testing.assert_allclose(s.distant_lights[0].direction, [0, 1, 0])
+    np.testing.assert_allclose(s.distant_lights[0].L @ [0.2126, 0.7152, 0.0722], 2.0, rtol=1e-3)
+    emissive = [sh for sh in s.shapes if sh.area_light is not None]
+    assert len(emissive) == 1 and np.allclose(emissive[0].area_light.L, 2.0)
+    pebble = [i for i in s.instance_sets if len(i.shapes) == 1 and s.shapes[i.shapes[0]].material == 0]
+    assert len(pebble) == 2 and pebble[0].shapes == pebble[1].shapes
+    for inst in s.instance_sets:
+        assert inst.transforms.shape[1:] == (4, 4)
+        for i in inst.shapes:
+            sh = s.shapes[i]
+            mesh = s.meshes[sh.mesh]
+            assert 0 <= sh.material < len(s.materials)
+            assert mesh.positions.dtype == np.float32 and mesh.indices.dtype == np.int32
+            assert mesh.indices.max() < len(mesh.positions)
+    assert s.warnings == [f'{DATA / "mini.pbrt"}:5: Sampler "zsobol": sampled with this renderer\'s Sobol sampler']
