@@ -81,14 +81,29 @@ def rgb_weight_table() -> tuple[np.ndarray, float, float]:
     return (w / trapezoid).astype(np.float32), float(lam[0]), TABLE_STEP_NM
 
 
+def _cumulative_rgb_weight(wavelengths_nm: np.ndarray) -> np.ndarray:
+    """∫ from 360 nm to λ of the table's piecewise-linear w, exactly (quadratic inside a cell)."""
+    w, lambda_min, step = rgb_weight_table()
+    w = w.astype(np.float64)
+    cells = step * 0.5 * (w[1:] + w[:-1])
+    nodes = np.concatenate([np.zeros((1, 3)), np.cumsum(cells, axis=0)])
+    x = np.clip((np.asarray(wavelengths_nm, np.float64) - lambda_min) / step, 0.0, len(w) - 1.0)
+    k = np.minimum(np.floor(x).astype(int), len(w) - 2)
+    t = (x - k)[:, None]
+    return nodes[k] + step * (w[k] * t + 0.5 * (w[k + 1] - w[k]) * t * t)
+
+
 def mode_wavelengths(mode: str) -> tuple[np.ndarray, np.ndarray, float]:
     """(wavelengths (n,), RGB weights (n, 3), band width in nm each sample stands for) of a mode.
 
     Modes: ``"rgb3"`` (the seed: R(650), R(510), R(475) used directly as R, G, B; monochromatic,
-    band 0), ``"spectral:N"`` (the N stratum midpoints of [360, 830], band = stratum width),
+    band 0), ``"spectral:N"`` (N equal strata of [360, 830]: the sample sits at the midpoint, its
+    weight is the colour-matching integral over the whole stratum, band = stratum width),
     ``"reference"`` (every nm of [360, 830] with trapezoid weights, band 1 nm).
-    The band is how wide a slice of spectrum one sample represents; the thin-film code averages
-    the interference over it so thick films converge instead of aliasing.
+    The band is how wide a slice of spectrum one sample represents; the thin-film code returns the
+    band average of R there, so Σ R̄_i ∫_stratum w is exact whenever R or w is flat across a
+    stratum, and thick films converge instead of aliasing. Stratum integrals (not w at the
+    midpoint) also keep few strata usable: 4 midpoint values of the sRGB blue weight sum to < 0.
     """
     span = LAMBDA_MAX_NM - LAMBDA_MIN_NM
     if mode == "rgb3":
@@ -106,6 +121,8 @@ def mode_wavelengths(mode: str) -> tuple[np.ndarray, np.ndarray, float]:
         if n < 1:
             raise ValueError(f"spectral mode needs a positive sample count, got {mode!r}")
         step = span / n
-        lam = LAMBDA_MIN_NM + (np.arange(n) + 0.5) * step
-        return lam, spectrum_to_rgb_weights(lam), step
+        edges = LAMBDA_MIN_NM + np.arange(n + 1) * step
+        cumulative = _cumulative_rgb_weight(edges)
+        weights = np.diff(cumulative, axis=0)
+        return 0.5 * (edges[:-1] + edges[1:]), weights / weights.sum(axis=0), step
     raise ValueError(f"unknown thin-film mode {mode!r}: use 'rgb3', 'spectral:N' or 'reference'")

@@ -9,8 +9,9 @@ import pytest
 
 from renderer.errors import Location, MissingFileError, SceneError
 from renderer.scene import load_description
-from renderer.scene.builder import UNSUPPORTED
+from renderer.scene.builder import UNSUPPORTED, Builder
 from renderer.scene.params import Param, ParamSet
+from renderer.scene.parser import SIGNATURES
 from renderer.scene.shapes import bilinear_mesh, disk, sphere
 from renderer.scene.tokenizer import tokenize
 
@@ -321,8 +322,10 @@ def test_unsupported_things_and_unused_parameters_warn_with_location(tmp_path):
     assert (s.film.width, s.sampler.spp, s.sampler.kind, s.integrator.max_depth) == (32, 6, "sobol", 3)
 
 
-def test_unsupported_table_is_well_formed():
+def test_unsupported_table_is_well_formed_and_every_directive_is_handled():
     assert all(action in ("warn", "error") and reason for action, reason in UNSUPPORTED.values())
+    for name in set(SIGNATURES) - {"Include", "Import"}:       # those two the parser expands
+        assert hasattr(Builder, name) or (name, "*") in UNSUPPORTED, name
 
 
 # --- materials and textures ------------------------------------------------------------------------

@@ -1,6 +1,8 @@
 """Tokens -> directives: each pbrt-v4 directive with its positional arguments, its typed
 parameter list and its file:line. ``Include``/``Import`` are expanded here, in place, so the
-builder sees one flat stream whose locations still name the file each directive came from."""
+builder sees one flat stream whose locations still name the file each directive came from.
+``Import`` is read as ``Include``: pbrt-v4 only adds that an imported file may be parsed in
+parallel and must not leave transforms changed, which a well-formed file does not do anyway."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -55,23 +57,24 @@ class Directive:
     loc: Location = Location("", 0)
 
 
-def parse_file(path: str | Path, _including: tuple[Path, ...] = (), _loc: Location | None = None) -> Iterator[Directive]:
+def parse_file(path: str | Path, chain: tuple[Path, ...] = (), included_at: Location | None = None
+               ) -> Iterator[Directive]:
     """Yield the directives of ``path`` with its includes expanded. Include paths resolve against
-    the folder of the file that names them; a file including itself (directly or not) is an error."""
+    the folder of the file that names them; ``chain`` (the files including this one) catches a
+    file that includes itself, directly or not; ``included_at`` locates errors about the file."""
     path = Path(path)
     if not path.is_file():
-        raise MissingFileError(path, _loc, "scene file")
+        raise MissingFileError(path, included_at, "scene file")
     key = path.resolve()
-    if key in _including:
-        chain = " -> ".join(p.name for p in (*_including, key))
-        raise SceneError(f"include cycle: {chain}", _loc)
+    if key in chain:
+        raise SceneError(f"include cycle: {' -> '.join(p.name for p in (*chain, key))}", included_at)
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as e:
-        raise SceneError(f"cannot read {path}: {e}", _loc) from e
+        raise SceneError(f"cannot read {path}: {e}", included_at) from e
     for d in _Parser(tokenize(text, str(path))).directives():
         if d.name in ("Include", "Import"):
-            yield from parse_file(path.parent / str(d.args[0]), (*_including, key), d.loc)
+            yield from parse_file(path.parent / str(d.args[0]), (*chain, key), d.loc)
         else:
             yield d
 
@@ -143,7 +146,7 @@ class _Parser:
         values: list[Token] = []
         while True:
             t = self._peek()
-            if t is None:
+            if t is None or not _is_value(t):
                 raise SceneError('unterminated "[": no matching "]"', open_loc)
             self._take("]")
             if t.kind == "]":

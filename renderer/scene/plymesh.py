@@ -61,8 +61,13 @@ def _faces(ply: plyfile.PlyData, path: Path, loc: Location) -> np.ndarray:
     counts = np.fromiter((len(p) for p in polygons), dtype=np.int64, count=len(polygons))
     if np.any(counts < 3):
         raise SceneError(f"{path}: face {int(np.argmax(counts < 3))} has fewer than 3 vertices", loc)
-    triangles = []
+    triangles, sources = [], []
     for k in np.unique(counts):
-        group = np.stack(polygons[counts == k]).astype(np.int64)
-        triangles.extend(group[:, [0, i, i + 1]] for i in range(1, k - 1))
-    return np.concatenate(triangles) if triangles else np.zeros((0, 3), dtype=np.int64)
+        faces = np.nonzero(counts == k)[0]
+        group = np.stack(polygons[faces]).astype(np.int64)
+        for i in range(1, k - 1):
+            triangles.append(group[:, [0, i, i + 1]])
+            sources.append(faces * len(polygons) + i)  # sorts triangles into the file's face order
+    if not triangles:
+        return np.zeros((0, 3), dtype=np.int64)
+    return np.concatenate(triangles)[np.argsort(np.concatenate(sources), kind="stable")]

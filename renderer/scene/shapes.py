@@ -39,7 +39,8 @@ def validated_mesh(positions: np.ndarray, indices: np.ndarray, normals: np.ndarr
         a = np.asarray(a, dtype=np.float64)
         if a.size != len(P) * width:
             raise SceneError(f"{name}: {key} has {a.size // width} entries for {len(P)} vertices", loc)
-        a32 = a.reshape(-1, width).astype(np.float32)
+        with np.errstate(over="ignore"):          # too large for float32 becomes inf, refused below
+            a32 = a.reshape(-1, width).astype(np.float32)
         if not np.all(np.isfinite(a32)):
             raise SceneError(f"{name}: {key} contains NaN or infinite values", loc)
         out[key] = a32
