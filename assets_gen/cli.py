@@ -13,7 +13,7 @@ import sys
 from assets_gen.common import GeneratorError
 
 #: Generator modules, in the order ``--help`` lists them.
-GENERATORS: tuple[str, ...] = ()
+GENERATORS: tuple[str, ...] = ("seashell", "sunglasses", "umbrella", "palm", "sky")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -45,9 +45,11 @@ class Mesh:
 
     def transformed(self, rotation: np.ndarray, translation: np.ndarray = np.zeros(3),
                     scale: float = 1.0) -> "Mesh":
-        """``x -> scale * R x + t`` for a rotation ``R``; normals rotate with it."""
+        """``x -> scale * R x + t`` for an orthogonal ``R``; normals turn with it, and a mirror
+        (det R < 0) also reverses the winding so faces stay outward."""
         r = np.asarray(rotation, dtype=np.float64)
-        return Mesh(scale * self.vertices @ r.T + translation, self.faces, self.normals @ r.T, self.uvs)
+        faces = self.faces[:, ::-1].copy() if np.linalg.det(r) < 0 else self.faces
+        return Mesh(scale * self.vertices @ r.T + translation, faces, self.normals @ r.T, self.uvs)
 
     def signed_volume(self) -> float:
         """Divergence-theorem volume; positive for a closed surface whose faces wind outward."""
@@ -126,7 +128,7 @@ def closed_solid(outer: Mesh, inner_vertices: np.ndarray, loops: list[np.ndarray
     """Close an open surface into a solid: an inner surface with the same connectivity (winding
     reversed) at ``inner_vertices``, and a rim strip along each boundary ``loop`` (closed index
     loops into ``outer.vertices``). The rim winds against the outer surface's boundary edges so
-    the whole solid is consistently oriented; rims are separate parts, so their edges stay sharp."""
+    the whole solid is consistently oriented; rims are flat-shaded quads, so their edges stay sharp."""
     inner = Mesh.part(inner_vertices, outer.faces[:, ::-1], outer.uvs)
     directed = set(map(tuple, np.concatenate([outer.faces[:, [0, 1]], outer.faces[:, [1, 2]],
                                               outer.faces[:, [2, 0]]]).tolist()))
@@ -135,12 +137,17 @@ def closed_solid(outer: Mesh, inner_vertices: np.ndarray, loops: list[np.ndarray
         loop = np.asarray(loop)
         if (int(loop[0]), int(loop[1])) not in directed:
             loop = loop[::-1]
-        ring = np.concatenate([loop, loop[:1]])
-        k = len(ring)
-        o, i = np.arange(k), np.arange(k) + k          # outer ring, then inner ring
-        faces = np.concatenate([np.stack([o[1:], o[:-1], i[:-1]], 1), np.stack([o[1:], i[:-1], i[1:]], 1)])
-        verts = np.concatenate([outer.vertices[ring], inner_vertices[ring]])
-        rims.append(Mesh.part(verts, faces, np.concatenate([outer.uvs[ring], outer.uvs[ring]])))
+        # one flat quad (own 4 vertices) per boundary edge: the rim is as narrow as the wall, and
+        # smoothing it around the loop's corners would bend normals against the faces
+        a, b = loop, np.roll(loop, -1)
+        quads = np.stack([outer.vertices[b], outer.vertices[a], inner_vertices[a], inner_vertices[b]], 1)
+        n = np.cross(quads[:, 1] - quads[:, 0], quads[:, 2] - quads[:, 0])
+        n += np.cross(quads[:, 2] - quads[:, 0], quads[:, 3] - quads[:, 0])
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+        base = 4 * np.arange(len(loop))[:, None]
+        faces = np.concatenate([base + [0, 1, 2], base + [0, 2, 3]])
+        uvs = np.stack([outer.uvs[b], outer.uvs[a], outer.uvs[a], outer.uvs[b]], 1)
+        rims.append(Mesh(quads.reshape(-1, 3), faces, np.repeat(n, 4, axis=0), uvs.reshape(-1, 2)))
     return Mesh.join([outer, inner, *rims])
 
 
@@ -153,10 +160,13 @@ def grid_boundary(n_u: int, n_v: int, wrap_v: bool) -> list[np.ndarray]:
 
 
 def thicken(points: np.ndarray, thickness: np.ndarray | float, outward: np.ndarray,
-            wrap_v: bool = False, u: np.ndarray | None = None, v: np.ndarray | None = None) -> Mesh:
+            wrap_v: bool = False, u: np.ndarray | None = None, v: np.ndarray | None = None,
+            height_field: bool = False) -> Mesh:
     """A solid wall from an open swept surface: the surface is the outside (its normals turned to
     agree on average with the ``outward`` hint, (3,) or per point), the inside is the surface moved
-    ``thickness`` (scalar or per point, (n_u, n_v)) along the inward normal, with rims on the boundary."""
+    ``thickness`` (scalar or per point, (n_u, n_v)) along the inward normal, with rims on the boundary.
+    A ``height_field`` over the plane normal to a fixed ``outward`` is moved straight along it
+    instead: corrugations sharper than the wall (scallop ribs) then stay corrugated, not folded."""
     outer = grid(points, wrap_v=wrap_v, u=u, v=v)
     hint = np.broadcast_to(np.asarray(outward, dtype=np.float64), np.shape(points))
     if np.einsum("ij,ij->", outer.normals, seam_grid(hint, wrap_v).reshape(-1, 3)) < 0:
@@ -164,7 +174,8 @@ def thicken(points: np.ndarray, thickness: np.ndarray | float, outward: np.ndarr
     t = seam_grid(np.broadcast_to(np.asarray(thickness, dtype=np.float64)[..., None],
                                   np.shape(points)[:2] + (1,)), wrap_v).reshape(-1, 1)
     n_u, n_v = np.shape(points)[0], np.shape(points)[1] + int(wrap_v)
-    return closed_solid(outer, outer.vertices - t * outer.normals, grid_boundary(n_u, n_v, wrap_v))
+    inward = hint.reshape(-1, 3)[:1] if height_field else outer.normals
+    return closed_solid(outer, outer.vertices - t * inward, grid_boundary(n_u, n_v, wrap_v))
 
 
 def transport_frames(path: np.ndarray, closed: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -192,7 +203,8 @@ def tube(path: np.ndarray, radius: np.ndarray | float, sides: int = 12, closed: 
     p = np.asarray(path, dtype=np.float64)
     t, n, b = transport_frames(p, closed)
     psi = 2.0 * np.pi * np.arange(sides) / sides
-    r = np.broadcast_to(np.asarray(radius, dtype=np.float64).reshape(len(p), -1), (len(p), sides))
+    r = np.asarray(radius, dtype=np.float64)
+    r = np.broadcast_to(r.reshape(len(p), -1) if r.ndim else r, (len(p), sides))
     # the profile turns from N towards -B, so ∂p/∂u × ∂p/∂v points away from the axis
     ring = np.cos(psi)[None, :, None] * n[:, None] - np.sin(psi)[None, :, None] * b[:, None]
     pts = p[:, None] + r[..., None] * ring

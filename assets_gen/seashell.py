@@ -1,0 +1,185 @@
+"""Seashells: the parametric gastropod shell of Cortie (1989) in Picado's (2009) notation, and a
+ribbed scallop valve.
+
+The gastropod surface is a logarithmic helico-spiral swept by an elliptical aperture that grows
+with it (optionally carrying nodules). For growth angle θ and aperture angle s:
+
+    g = exp(θ cot α),  r(s, θ) = (cos²s/a² + sin²s/b²)^(-1/2) + k(s, θ)
+    x = D (A sinβ cosθ + r cos(s+φ) cos(θ+Ω) − r sinμ sin(s+φ) sinθ) g
+    y = (−A sinβ sinθ − r cos(s+φ) sin(θ+Ω) − r sinμ sin(s+φ) cosθ) g
+    z = (−A cosβ + r sin(s+φ) cosμ) g
+    k = L exp(−(2(s−P)/W1)² − (2 G(θ)/W2)²),  G(θ) = (2π/N)(Nθ/2π − round(Nθ/2π))
+
+α is the equiangular (growth) angle, β the spire angle, A the aperture's distance from the axis,
+a and b the aperture's semi-axes, φ Ω μ its orientation, D = ±1 the coiling sense, and L P W1 W2 N
+the nodules' height, position on the aperture, widths and count per whorl. The spiral's axis (z)
+becomes +y, apex up; the shell is scaled to the requested length in metres.
+
+UVs follow growth: u = θ from apex (0) to lip (1), v = s around the aperture; for the scallop
+u runs from the umbo to the margin and v across the fan. Lines of constant u are growth lines.
+The wall is solid: an inner surface (the aperture shrunk towards its centre by the wall fraction,
+which never folds over), a rim at the lip and a plug-like rim at the apex. Successive whorls of a
+gastropod overlap each other as in the published model; each whorl is still a closed solid.
+"""
+from __future__ import annotations
+
+import argparse
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from assets_gen.common import require, staged_output, write_manifest
+from assets_gen.meshing import Mesh, closed_solid, grid, grid_boundary, seam_grid, thicken
+
+
+@dataclass(frozen=True)
+class Gastropod:
+    """Cortie/Picado shell parameters (angles in degrees, lengths relative to each other)."""
+
+    alpha: float    # equiangular spiral angle
+    beta: float     # spire angle: between the coiling axis and the spiral's growth
+    A: float        # aperture centre's distance from the origin at θ = 0
+    a: float        # aperture semi-axis across the whorl (radial)
+    b: float        # aperture semi-axis along the coiling axis
+    phi: float      # aperture rotation in its plane
+    omega: float    # aperture rotation about the coiling axis
+    mu: float       # aperture tilt out of the radial plane
+    turns: float    # whorls from apex to lip
+    D: int = 1      # +1 dextral, -1 sinistral
+    L: float = 0.0  # nodule height
+    P: float = 0.0  # nodule position on the aperture (rad of s)
+    W1: float = 1.0  # nodule width along s (rad)
+    W2: float = 1.0  # nodule width along θ (rad)
+    N: float = 0.0  # nodules per whorl
+
+
+#: Presets shaped after real shells (parameters chosen by us in Cortie's/Picado's ranges).
+PRESETS: dict[str, Gastropod] = {
+    # tall, slowly expanding tower of many whorls
+    "turritella": Gastropod(alpha=88.9, beta=4.0, A=22.2, a=1.3, b=1.5, phi=0.0, omega=0.0, mu=0.0,
+                            turns=12.0),
+    # planispiral, involute: each whorl wraps the last (expansion e^(2π cot 80°) ≈ 3 per whorl)
+    "nautilus": Gastropod(alpha=80.0, beta=90.0, A=1.0, a=0.55, b=0.42, phi=0.0, omega=0.0, mu=0.0,
+                          turns=3.0),
+    # conical spire, large body whorl with a row of knobs on the shoulder
+    "conch": Gastropod(alpha=84.0, beta=22.0, A=2.6, a=0.85, b=1.7, phi=-15.0, omega=0.0, mu=4.0,
+                       turns=6.0, L=0.55, P=1.0, W1=0.6, W2=0.4, N=9.0),
+}
+SCALLOP = "scallop"
+
+
+def gastropod_surface(g: Gastropod, n_theta: int, n_s: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Points (n_theta, n_s, 3) of the shell surface in the model's z-up frame, the aperture centres
+    (n_theta, 3), and θ (n_theta,)."""
+    alpha, beta, phi, omega, mu = np.radians([g.alpha, g.beta, g.phi, g.omega, g.mu])
+    theta = np.linspace(0.0, 2.0 * np.pi * g.turns, n_theta)[:, None]
+    s = np.linspace(-np.pi, np.pi, n_s, endpoint=False)[None, :]
+    growth = np.exp(theta / np.tan(alpha))
+    r = 1.0 / np.sqrt(np.cos(s) ** 2 / g.a ** 2 + np.sin(s) ** 2 / g.b ** 2)
+    if g.N > 0 and g.L > 0:
+        nth = g.N * theta / (2.0 * np.pi)
+        G = (2.0 * np.pi / g.N) * (nth - np.round(nth))
+        r = r + g.L * np.exp(-(2.0 * (s - g.P) / g.W1) ** 2 - (2.0 * G / g.W2) ** 2)
+    cx = g.D * g.A * np.sin(beta) * np.cos(theta)
+    cy = -g.A * np.sin(beta) * np.sin(theta)
+    cz = -g.A * np.cos(beta) * np.ones_like(theta)
+    x = g.D * (r * np.cos(s + phi) * np.cos(theta + omega) - r * np.sin(mu) * np.sin(s + phi) * np.sin(theta))
+    y = -r * np.cos(s + phi) * np.sin(theta + omega) - r * np.sin(mu) * np.sin(s + phi) * np.cos(theta)
+    z = r * np.sin(s + phi) * np.cos(mu)
+    centres = np.concatenate([cx, cy, cz], axis=1)
+    pts = (np.stack(np.broadcast_arrays(x, y, z), axis=-1) + centres[:, None]) * growth[..., None]
+    return pts, centres * growth, theta[:, 0]
+
+
+def gastropod_mesh(g: Gastropod, wall: float, per_turn: int, around: int) -> Mesh:
+    """The solid shell in the model frame. ``wall`` is the wall's share of the aperture radius; over
+    the first half whorl it closes towards the centre so the apex reads as sealed."""
+    n_theta = max(8, int(round(per_turn * g.turns)) + 1)
+    pts, centres, theta = gastropod_surface(g, n_theta, around)
+    outer = grid(pts, wrap_v=True)
+    if np.einsum("ij,ij->", outer.normals,
+                 seam_grid(pts - centres[:, None], wrap_v=True).reshape(-1, 3)) < 0:
+        outer = outer.flipped()
+    seal = np.clip(theta / np.pi, 0.0, 1.0)
+    keep = (1.0 - wall) * seal + 0.3 * (1.0 - seal)      # inner/outer radius about the centre
+    c = centres[:, None]
+    inner = seam_grid(c + keep[:, None, None] * (pts - c), wrap_v=True).reshape(-1, 3)
+    return closed_solid(outer, inner, grid_boundary(n_theta, around + 1, wrap_v=True))
+
+
+def scallop_mesh(ribs: int, wall: float, n_r: int, n_fan: int) -> Mesh:
+    """A scallop valve of unit length (umbo to margin) in a z-up frame: a domed fan with ``ribs``
+    radial ribs and two flat ears on the hinge line, built in polar coordinates around the umbo."""
+    fan = np.radians(60.0)
+    rho = np.linspace(0.04, 1.0, n_r)[:, None]
+    psi = np.linspace(-np.pi / 2, np.pi / 2, n_fan)[None, :]
+    ear = 0.28
+    # outline: a circle through the umbo (r = cos ψ) inside the fan, straight ears beyond it
+    t = np.clip((np.abs(psi) - fan) / (np.pi / 2 - fan), 0.0, 1.0)
+    r_max = np.where(np.abs(psi) <= fan, np.cos(psi), (1 - t) * np.cos(fan) + t * ear)
+    r = rho * r_max
+    x, y = r * np.sin(psi), r * np.cos(psi)
+    dome = 0.2 * np.clip(1.0 - (x ** 2 + (y - 0.5) ** 2) / 0.4, 0.0, None)
+    in_fan = np.clip(1.0 - t * 3.0, 0.0, 1.0)
+    rib = 0.025 * rho * in_fan * (0.5 + 0.5 * np.cos(ribs * np.pi * psi / fan)) ** 1.5
+    pts = np.stack(np.broadcast_arrays(x, y, dome + rib), axis=-1)
+    # the wall thins towards the umbo, where the valve tapers to its beak
+    return thicken(pts, wall * np.clip(rho / 0.3, 0.03, 1.0) * np.ones_like(psi), outward=np.array([0.0, 0.0, 1.0]),
+                   height_field=True)
+
+
+def shell_mesh(preset: str, length: float, wall: float, per_turn: int, around: int, ribs: int,
+               rng: np.random.Generator) -> Mesh:
+    """The shell in metres, y up, resting on y = 0, its largest extent ``length``. The seed varies
+    the preset slightly (growth angle, aperture, nodules) so no two shells are clones."""
+    if preset == SCALLOP:
+        m = scallop_mesh(ribs + int(rng.integers(-2, 3)), wall * 0.15,
+                         n_r=max(8, per_turn // 2), n_fan=max(2 * around, 12 * ribs))
+    else:
+        j = rng.normal(1.0, 0.02, size=4)
+        base = PRESETS[preset]
+        g = replace(base, alpha=base.alpha + 0.15 * rng.standard_normal(), a=base.a * j[0], b=base.b * j[1],
+                    turns=base.turns * j[2], L=base.L * j[3])
+        m = gastropod_mesh(g, wall, per_turn, around)
+    # model frame z-up -> scene y-up: (x, y, z) -> (x, z, -y), a proper rotation
+    m = m.transformed(np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]]))
+    lo, hi = m.vertices.min(0), m.vertices.max(0)
+    scale = length / float((hi - lo).max())
+    return m.transformed(np.eye(3), -scale * np.array([(lo[0] + hi[0]) / 2, lo[1], (lo[2] + hi[2]) / 2]), scale)
+
+
+def generate(out_dir: str | Path, preset: str = "conch", length: float = 0.07, wall: float = 0.08,
+             per_turn: int = 48, around: int = 40, ribs: int = 18, seed: int = 0) -> list[str]:
+    """Write ``<preset>.ply`` and ``seashell.json`` into ``out_dir``."""
+    params: dict[str, Any] = dict(preset=preset, length=length, wall=wall, per_turn=per_turn,
+                                  around=around, ribs=ribs)
+    require(preset in (*PRESETS, SCALLOP), f"unknown preset {preset!r}; choose from {[*PRESETS, SCALLOP]}")
+    require(0.005 <= length <= 1.0, f"length must be 0.005..1 m, got {length}")
+    require(0.01 <= wall <= 0.5, f"wall (share of the aperture radius) must be 0.01..0.5, got {wall}")
+    require(8 <= per_turn <= 512 and 8 <= around <= 512, "per-turn and around must be 8..512")
+    require(3 <= ribs <= 60, f"ribs must be 3..60, got {ribs}")
+    if preset != SCALLOP:
+        params["model"] = asdict(PRESETS[preset])
+    mesh = shell_mesh(preset, length, wall, per_turn, around, ribs, np.random.default_rng(seed))
+    with staged_output(out_dir) as stage:
+        mesh.write(stage / f"{preset}.ply")
+        write_manifest(stage / "seashell.json", "seashell", params, seed, [f"{preset}.ply"])
+    return [str(Path(out_dir) / f"{preset}.ply"), str(Path(out_dir) / "seashell.json")]
+
+
+def register(subparsers: Any) -> None:
+    p = subparsers.add_parser("seashell", help="a parametric gastropod shell or a ribbed scallop (PLY)",
+                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--preset", default="conch", help=f"one of {[*PRESETS, SCALLOP]} (default conch)")
+    p.add_argument("--length", type=float, default=0.07, help="largest extent, m (default 0.07)")
+    p.add_argument("--wall", type=float, default=0.08,
+                   help="wall thickness as a share of the aperture radius (default 0.08)")
+    p.add_argument("--per-turn", type=int, default=48, help="mesh rows per whorl (default 48)")
+    p.add_argument("--around", type=int, default=40, help="mesh columns around the aperture (default 40)")
+    p.add_argument("--ribs", type=int, default=18, help="scallop: radial ribs (default 18)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--out", type=Path, default=Path("assets") / "seashell", help="output folder")
+    p.set_defaults(run=lambda a: generate(a.out, a.preset, a.length, a.wall, a.per_turn, a.around,
+                                          a.ribs, a.seed))
