@@ -45,7 +45,7 @@ UNSUPPORTED: dict[tuple[str, str], tuple[str, str]] = {
                                        "(using it in a MediumInterface is an error)"),
     ("Film", "gbuffer"): ("warn", 'rendered as an "rgb" film'),
     ("Film", "spectral"): ("warn", 'rendered as an "rgb" film'),
-    ("Sampler", "*"): ("warn", "sampled with this renderer's Sobol sampler"),
+    ("Sampler", "*"): ("warn", "rendered with the independent sampler (low-discrepancy samplers are not implemented)"),
     ("Integrator", "*"): ("warn", 'rendered with the "path" integrator'),
     ("PixelFilter", "*"): ("warn", "pixel filters are not implemented; samples are box-filtered"),
     ("Accelerator", "*"): ("warn", "the BVH is this renderer's own"),
@@ -323,9 +323,9 @@ class Builder:
             spp = p.int("xsamples", 4, min=1) * p.int("ysamples", 4, min=1)
         else:
             spp = p.int("pixelsamples", 16, min=1)
-        if name not in ("independent", "sobol"):
+        if name != "independent":
             self.unsupported(d.name, name, d.loc)
-        self.scene.sampler = SamplerDesc("independent" if name == "independent" else "sobol", spp, p.int("seed", 0))
+        self.scene.sampler = SamplerDesc("independent", spp, p.int("seed", 0))
         self.warn_unused(d)
 
     def Integrator(self, d: Directive) -> None:

@@ -32,7 +32,7 @@ class FilmDesc:
 
 @dataclass
 class SamplerDesc:
-    kind: str = "independent"            # "independent" or "sobol"
+    kind: str = "independent"            # the only sampler so far
     spp: int = 16
     seed: int = 0
 
