@@ -15,11 +15,13 @@ class Film:
     device: str
     sum: wp.array = None
     bad: wp.array = None
+    rays: wp.array = None
     spp: int = 0
 
     def __post_init__(self) -> None:
         self.sum = wp.zeros(self.width * self.height, dtype=wp.vec3d, device=self.device)
         self.bad = wp.zeros(1, dtype=int, device=self.device)
+        self.rays = wp.zeros(1, dtype=wp.float64, device=self.device)
 
     def image(self) -> np.ndarray:
         """Linear RGB, float32 (H, W, 3): the mean of all samples taken so far."""
@@ -30,3 +32,8 @@ class Film:
     def bad_samples(self) -> int:
         """Samples dropped because their radiance was NaN, infinite or negative."""
         return int(self.bad.numpy()[0])
+
+    @property
+    def ray_count(self) -> float:
+        """Rays traced so far (camera, continuation and shadow rays)."""
+        return float(self.rays.numpy()[0])

@@ -77,7 +77,8 @@ def integrator_kernel(features: Features) -> wp.Kernel:
 
     @wp.kernel(module="unique")
     def integrate(scene: Scene, seed: int, sample_start: int, n_samples: int, row_offset: int, max_depth: int,
-                  film: wp.array(dtype=wp.vec3d), bad_samples: wp.array(dtype=int)):
+                  film: wp.array(dtype=wp.vec3d), bad_samples: wp.array(dtype=int),
+                  ray_count: wp.array(dtype=wp.float64)):
         tid = wp.tid()
         width = scene.cam.width
         pixel = row_offset * width + tid
@@ -86,6 +87,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
         n_lights = scene.lights.count
         sel = 1.0 / float(wp.max(n_lights, 1))
         acc = wp.vec3(0.0)
+        n_rays = int(0)
         for k in range(n_samples):
             rng = sample_rng(seed, sample_start + k, pixel)
             jit = rand2(rng)
@@ -101,6 +103,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
             depth = int(0)
             while True:
                 hit = intersect(scene.geo, o, d, 1.0e30)
+                n_rays += 1
                 if hit.inst < 0:
                     if wp.static(has_env):
                         Le = env_radiance(scene.lights, d)
@@ -167,6 +170,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
                             if max3(f) > 0.0:
                                 origin = offset_origin(s.p, s.ng, ls.wi)
                                 t_max = ls.dist * (1.0 - 1.0e-5) - ray_epsilon(s.p)
+                                n_rays += 1
                                 if not occluded(scene.geo, origin, ls.wi, t_max):
                                     w = float(1.0)
                                     if not ls.delta:
@@ -206,5 +210,6 @@ def integrator_kernel(features: Features) -> wp.Kernel:
             else:
                 wp.atomic_add(bad_samples, 0, 1)
         film[pixel] = film[pixel] + wp.vec3d(wp.float64(acc[0]), wp.float64(acc[1]), wp.float64(acc[2]))
+        wp.atomic_add(ray_count, 0, wp.float64(n_rays))
 
     return integrate

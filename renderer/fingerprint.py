@@ -1,0 +1,54 @@
+"""A content hash of a scene, so a checkpoint is only resumed into the scene that made it."""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from renderer.scene.description import SceneDescription
+from renderer.scene.params import ParamSet
+
+
+def _feed(h: "hashlib._Hash", x: Any) -> None:
+    if isinstance(x, np.ndarray):
+        h.update(str((x.dtype.str, x.shape)).encode())
+        h.update(np.ascontiguousarray(x).tobytes())
+    elif isinstance(x, ParamSet):
+        for name in sorted(x.params):
+            p = x.params[name]
+            _feed(h, (p.type, p.name, list(p.values)))
+    elif isinstance(x, Path):
+        # a referenced file counts by its bytes: editing a texture invalidates a checkpoint
+        h.update(str(x).encode())
+        if x.is_file():
+            h.update(hashlib.sha256(x.read_bytes()).digest())
+    elif dataclasses.is_dataclass(x):
+        for f in dataclasses.fields(x):
+            if f.name not in ("loc", "warnings", "path"):
+                h.update(f.name.encode())
+                _feed(h, getattr(x, f.name))
+    elif isinstance(x, dict):
+        for k in sorted(x):
+            _feed(h, (k, x[k]))
+    elif isinstance(x, (list, tuple)):
+        h.update(b"[")
+        for v in x:
+            _feed(h, v)
+        h.update(b"]")
+    else:
+        h.update(repr(x).encode())
+
+
+def scene_fingerprint(desc: SceneDescription) -> str:
+    """SHA-256 over everything that determines the image (geometry, materials, textures and the
+    files they name, lights, camera), ignoring source locations and warnings."""
+    h = hashlib.sha256()
+    _feed(h, desc)
+    for t in desc.textures.values():
+        name = t.params.params.get("filename")
+        if name is not None:
+            _feed(h, (t.base_dir / str(name.values[0])).resolve())
+    return h.hexdigest()
