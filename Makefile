@@ -14,7 +14,7 @@ $(BIN)/python:
 
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	$(BIN)/pip install --upgrade pip >/dev/null
-	$(BIN)/pip install -e '.[test]'
+	$(BIN)/pip install -e '.[test,denoise]'
 	touch $@
 
 install: $(VENV)/.installed

@@ -1,18 +1,21 @@
 """``render scene.pbrt -o out.exr``: the command-line renderer.
 
-Exit codes: 0 success, 2 bad scene or arguments (one line naming file:line), 3 the image has
-dropped NaN/Inf samples (written anyway, with a warning), 130 interrupted (what was rendered is
-written).
+Exit codes: 0 done; 2 bad scene or arguments (one line naming file:line); 3 the image was
+written but some samples were NaN/Inf and were dropped; 130 interrupted by SIGINT (Ctrl-C) and
+143 by SIGTERM, after writing what was rendered (and the checkpoint, if one was asked for).
 """
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import time
 import traceback
 from pathlib import Path
 
-EXIT_OK, EXIT_BAD_INPUT, EXIT_BAD_SAMPLES, EXIT_INTERRUPTED = 0, 2, 3, 130
+import numpy as np
+
+EXIT_OK, EXIT_BAD_INPUT, EXIT_BAD_SAMPLES = 0, 2, 3
 
 
 def _resolution(text: str) -> tuple[int, int]:
@@ -23,6 +26,16 @@ def _resolution(text: str) -> tuple[int, int]:
     if w < 1 or h < 1:
         raise argparse.ArgumentTypeError(f"resolution must be positive, got {text!r}")
     return w, h
+
+
+def _aov_list(text: str) -> tuple[str, ...]:
+    from renderer.aov import AOV_NAMES
+
+    names = tuple(n.strip() for n in text.split(",") if n.strip())
+    bad = [n for n in names if n not in AOV_NAMES]
+    if bad:
+        raise argparse.ArgumentTypeError(f"unknown AOV {bad}; choose from {', '.join(AOV_NAMES)}")
+    return names
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -38,6 +51,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops (default: 0)")
     p.add_argument("--threads", type=int, help="CPU worker threads (default: all cores)")
     p.add_argument("--no-nee", action="store_true", help="BSDF sampling only (no light sampling): for checks")
+    g = p.add_argument_group("long renders")
+    g.add_argument("--time-limit", type=float, metavar="SECONDS", help="stop after the pass that crosses this")
+    g.add_argument("--checkpoint", type=Path, metavar="PATH", help="write the accumulation here (atomically)")
+    g.add_argument("--checkpoint-every", type=float, default=300.0, metavar="SECONDS",
+                   help="checkpoint interval (default: 300); a checkpoint is also written at the end")
+    g.add_argument("--resume", type=Path, metavar="PATH", help="continue from this checkpoint")
+    g.add_argument("--write-partial-every", type=float, metavar="SECONDS", help="keep the output image current")
+    g.add_argument("--aov", type=_aov_list, default=(), metavar="LIST",
+                   help="extra EXR layers: albedo,normal,depth")
+    g.add_argument("--denoise", action="store_true", help="denoise with Intel OIDN (pip install '.[denoise]')")
+    g.add_argument("--reference", type=Path, metavar="REF.exr", help="reference image for --error-log")
+    g.add_argument("--error-log", type=Path, metavar="CSV", help="append spp,seconds,relMSE rows as passes finish")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     return p
@@ -46,43 +71,74 @@ def build_parser() -> argparse.ArgumentParser:
 class _Progress:
     """A tqdm bar on a terminal, a plain line per ~10% otherwise (logs stay readable)."""
 
-    def __init__(self, enabled: bool):
-        self.enabled = enabled
+    def __init__(self, enabled: bool, total: int, done: int):
+        self.enabled, self.total = enabled, total
         self.bar = None
         self.last = -1
         self.t0 = time.perf_counter()
+        self.start = done
 
-    def __call__(self, done: int, total: int) -> None:
+    def __call__(self, done: int) -> None:
         if not self.enabled:
             return
         if sys.stderr.isatty():
             if self.bar is None:
                 from tqdm import tqdm
 
-                self.bar = tqdm(total=total, unit="spp", file=sys.stderr)
+                self.bar = tqdm(total=self.total, initial=self.start, unit="spp", file=sys.stderr)
             self.bar.update(done - self.bar.n)
         else:
-            decile = done * 10 // total
+            decile = done * 10 // self.total
             if decile != self.last:
                 self.last = decile
                 el = time.perf_counter() - self.t0
-                eta = el / done * (total - done)
-                print(f"render: {done}/{total} spp, {el:.1f} s elapsed, ETA {eta:.1f} s", file=sys.stderr, flush=True)
+                eta = el / max(done - self.start, 1) * (self.total - done)
+                print(f"render: {done}/{self.total} spp, {el:.1f} s elapsed, ETA {eta:.1f} s", file=sys.stderr, flush=True)
 
     def close(self) -> None:
         if self.bar is not None:
             self.bar.close()
 
 
-def write_image(path: Path, img, exposure: float, header: dict) -> None:
+class _StopSignals:
+    """SIGINT/SIGTERM set a flag; the render stops after the pass in flight and writes its image."""
+
+    def __init__(self):
+        self.signum: int | None = None
+
+    def __enter__(self) -> "_StopSignals":
+        self.saved = {s: signal.signal(s, self._handle) for s in (signal.SIGINT, signal.SIGTERM)}
+        return self
+
+    def _handle(self, signum, frame) -> None:
+        if self.signum is not None:  # a second signal: stop now
+            raise KeyboardInterrupt
+        self.signum = signum
+        print(f"\nrender: {signal.Signals(signum).name}: finishing the current pass, then writing",
+              file=sys.stderr, flush=True)
+
+    def __exit__(self, *exc) -> None:
+        for s, h in self.saved.items():
+            signal.signal(s, h)
+
+
+def relative_mse(img: np.ndarray, ref: np.ndarray) -> float:
+    """relMSE = mean((x - r)^2 / (r^2 + 0.01)), the usual convergence metric."""
+    return float(np.mean((img - ref) ** 2 / (ref ** 2 + 1e-2)))
+
+
+def write_outputs(path: Path, img, layers: dict, exposure: float, header: dict) -> None:
+    from renderer.aov import AOV_CHANNELS
     from renderer.imageio import write_exr, write_png
 
     if path.suffix.lower() == ".exr":
-        write_exr(path, img, header)
-    elif path.suffix.lower() == ".png":
-        write_png(path, img, exposure)
+        chans = {c: img[..., i] for i, c in enumerate("RGB")}
+        for name, data in layers.items():
+            names = AOV_CHANNELS.get(name, ("R", "G", "B"))
+            chans.update({f"{name}.{c}": data[..., i] for i, c in enumerate(names)})
+        write_exr(path, chans, header)
     else:
-        raise ValueError(f"output must end in .exr or .png, got {path}")
+        write_png(path, img, exposure)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -90,7 +146,8 @@ def main(argv: list[str] | None = None) -> int:
     from renderer.errors import RenderError
 
     try:
-        from renderer.api import RenderStats, load_scene, render
+        from renderer.api import load_scene, settings_for
+        from renderer.session import RenderSession, load_checkpoint, save_checkpoint
 
         scene = load_scene(args.scene)
         for w in scene.warnings:
@@ -98,25 +155,78 @@ def main(argv: list[str] | None = None) -> int:
         out = args.output or Path(scene.film.filename)
         if out.suffix.lower() not in (".exr", ".png"):
             raise RenderError(f"output must end in .exr or .png, got {out}")
+        if args.error_log and not args.reference:
+            raise RenderError("--error-log needs --reference REF.exr")
         w, h = args.res or (None, None)
-        stats = RenderStats()
-        prog = _Progress(not args.quiet)
-        try:
-            img = render(scene, spp=args.spp, device=args.device, seed=args.seed, width=w, height=h,
-                         max_depth=args.max_depth, nee=not args.no_nee, threads=args.threads,
-                         progress=prog, stats=stats)
-        finally:
-            prog.close()
-        seed = args.seed if args.seed is not None else scene.sampler.seed
-        header = {"spp": stats.spp, "seed": seed, "renderTimeSeconds": round(stats.seconds, 3),
-                  "scene": str(args.scene), "renderer": "summertime"}
-        write_image(out, img, args.exposure, header)
+        settings = settings_for(scene, seed=args.seed, width=w, height=h, max_depth=args.max_depth, nee=not args.no_nee)
+        ref = None
+        if args.reference:
+            from renderer.imageio import read_image
+
+            ref = read_image(args.reference)[..., :3]
+            if ref.shape[:2] != (settings.height, settings.width):
+                raise RenderError(f"reference {args.reference} is {ref.shape[1]}x{ref.shape[0]}, "
+                                  f"not {settings.width}x{settings.height}")
+        session = RenderSession(scene, settings, device=args.device, threads=args.threads)
+        if args.resume:
+            session.restore(load_checkpoint(args.resume), source=str(args.resume))
+            print(f"render: resumed {args.resume} at {session.film.spp} spp", file=sys.stderr)
+        spp = scene.sampler.spp if args.spp is None else args.spp
+        prog = _Progress(not args.quiet, spp, session.film.spp)
+        clock = {"checkpoint": time.perf_counter(), "partial": time.perf_counter()}
+
+        def on_pass(s: RenderSession) -> None:
+            prog(s.film.spp)
+            now = time.perf_counter()
+            if args.checkpoint and now - clock["checkpoint"] >= args.checkpoint_every:
+                save_checkpoint(args.checkpoint, s)
+                clock["checkpoint"] = now
+            if args.write_partial_every and now - clock["partial"] >= args.write_partial_every:
+                write_outputs(out, s.image(), {}, args.exposure, header(s))
+                clock["partial"] = now
+            if args.error_log:
+                new = not args.error_log.exists()
+                with open(args.error_log, "a") as f:
+                    if new:
+                        f.write("spp,seconds,relmse\n")
+                    f.write(f"{s.film.spp},{s.stats.seconds:.4f},{relative_mse(s.image(), ref):.6g}\n")
+
+        def header(s: RenderSession) -> dict:
+            return {**s.stats.header(), "seed": settings.seed, "scene": str(args.scene), "sceneHash": s.fingerprint,
+                    "renderer": "summertime"}
+
+        with _StopSignals() as stop:
+            try:
+                stats = session.run(spp, time_limit=args.time_limit, on_pass=on_pass,
+                                    should_stop=lambda: stop.signum is not None)
+            finally:
+                prog.close()
+            img = session.image()
+            layers: dict = {}
+            if args.aov or args.denoise:
+                from renderer.aov import render_aovs
+
+                aovs = render_aovs(session)
+                layers = {k: aovs[k] for k in args.aov}
+                if args.denoise:
+                    from renderer.denoise import denoise
+
+                    layers["noisy"] = img
+                    img = denoise(img, aovs["albedo"], aovs["normal"])
+            write_outputs(out, img, layers, args.exposure, header(session))
+            if args.checkpoint:
+                save_checkpoint(args.checkpoint, session)
         print(f"wrote {out}: {stats.width}x{stats.height}, {stats.spp} spp in {stats.seconds:.2f} s "
-              f"(+{stats.compile_seconds:.2f} s kernel load), {stats.samples_per_second / 1e6:.3f} M samples/s",
+              f"(+{stats.compile_seconds:.2f} s kernel load), {stats.samples_per_second / 1e6:.3f} M samples/s, "
+              f"{stats.rays_per_second / 1e6:.3f} M rays/s, peak memory {stats.peak_memory_mb:.0f} MB",
               file=sys.stderr)
+        if stats.spp < spp:
+            why = signal.Signals(stop.signum).name if stop.signum else ("time limit" if args.time_limit else "interrupt")
+            print(f"render: stopped by {why} at {stats.spp}/{spp} spp", file=sys.stderr)
+        if stop.signum is not None:
+            return 128 + stop.signum
         if stats.interrupted:
-            print(f"render: interrupted; wrote the {stats.spp} spp finished so far", file=sys.stderr)
-            return EXIT_INTERRUPTED
+            return 128 + signal.SIGINT
         if stats.bad_samples:
             print(f"warning: dropped {stats.bad_samples} NaN/Inf/negative samples (not averaged into the image)",
                   file=sys.stderr)
@@ -129,7 +239,7 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("render: interrupted before any pass finished; nothing written", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return 128 + signal.SIGINT
 
 
 if __name__ == "__main__":

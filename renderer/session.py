@@ -1,8 +1,9 @@
 """A progressive render: passes of samples added into a film until a sample count, a time limit
 or a stop request ends it. Its state (the film's sum and count plus what made it) can be saved
-and restored, and a restored render continues exactly as if it had never stopped, because each
-pass's random numbers depend only on (seed, sample index, pixel) and the pass sizes depend only
-on the resolution."""
+and restored, and a restored render continues bit for bit as if it had never stopped: a pass's
+random numbers depend only on (seed, sample index, pixel), and every pass adds exactly one
+sample per pixel, so the film's float64 sums are formed in the same order however a render is
+split into runs."""
 from __future__ import annotations
 
 import os
@@ -17,10 +18,6 @@ import numpy as np
 
 from renderer.errors import RenderError
 from renderer.scene.description import SceneDescription
-
-#: Samples in flight per launch: enough to amortise launch overhead, few enough for fine progress.
-SAMPLES_PER_LAUNCH = 1 << 19
-
 
 @dataclass(frozen=True)
 class RenderSettings:
@@ -99,7 +96,6 @@ class RenderSession:
                                  warnings=list(scene.warnings))
         n_threads = max(1, min(threads or default_threads(device), H))
         self.bands = [b for b in np.array_split(np.arange(H), n_threads) if len(b)]
-        self.per_launch = int(max(1, SAMPLES_PER_LAUNCH // (W * H)))
         self._fingerprint: str | None = None
 
     @property
@@ -110,14 +106,14 @@ class RenderSession:
             self._fingerprint = scene_fingerprint(self.scene)
         return self._fingerprint
 
-    def _pass(self, pool: ThreadPoolExecutor, start: int, count: int) -> None:
+    def _pass(self, pool: ThreadPoolExecutor, sample: int) -> None:
         import warp as wp
 
         s = self.settings
 
         def launch(band: np.ndarray) -> None:
             wp.launch(self.kernel, dim=len(band) * self.ds.width,
-                      inputs=[self.ds.struct, s.seed, start, count, int(band[0]), s.max_depth,
+                      inputs=[self.ds.struct, s.seed, sample, 1, int(band[0]), s.max_depth,
                               self.film.sum, self.film.bad, self.film.rays],
                       device=self.device)
             wp.synchronize_device(self.device)
@@ -136,9 +132,8 @@ class RenderSession:
         with ThreadPoolExecutor(max_workers=len(self.bands)) as pool:
             try:
                 while self.film.spp < spp:
-                    count = min(self.per_launch, spp - self.film.spp)
-                    self._pass(pool, self.film.spp, count)
-                    self.film.spp += count
+                    self._pass(pool, self.film.spp)
+                    self.film.spp += 1
                     self._update_stats(base_seconds + time.perf_counter() - t0)
                     if on_pass:
                         on_pass(self)

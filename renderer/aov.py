@@ -1,0 +1,96 @@
+"""Arbitrary output variables at the first visible surface: albedo, shading normal and depth,
+the guides a denoiser needs. Rendered by their own small kernel after the beauty passes.
+
+Albedo is the material's directional albedo seen from the camera, estimated as the mean
+throughput weight of its own BSDF samples, so every material (present or future) defines it
+without extra code; specular-only surfaces report their Fresnel-weighted reflectance."""
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+import warp as wp
+
+from renderer.camera import generate_ray
+from renderer.device_scene import Features, Scene
+from renderer.geometry import intersect, surface_at
+from renderer.integrator import bump_normal, load_bsdf
+from renderer.materials import REGISTRY, kind_id
+from renderer.materials.bsdf import BSDFSample
+from renderer.sampling import frame_from_tangent, rand2, sample_rng, to_local
+
+AOV_NAMES = ("albedo", "normal", "depth")
+#: Channel names per AOV in the EXR (layer.channel, as OpenEXR's multi-layer convention).
+AOV_CHANNELS = {"albedo": ("R", "G", "B"), "normal": ("X", "Y", "Z"), "depth": ("Z",)}
+
+
+@lru_cache(maxsize=None)
+def aov_kernel(features: Features) -> wp.Kernel:
+    mods = [REGISTRY[name] for name in features.materials]
+    kinds = [kind_id(name) for name in features.materials]
+    n_mat = len(mods)
+    has_bump = features.bump
+
+    @wp.kernel(module="unique")
+    def first_hit(scene: Scene, seed: int, n_samples: int, albedo: wp.array(dtype=wp.vec3),
+                  normal: wp.array(dtype=wp.vec3), depth: wp.array(dtype=float)):
+        pixel = wp.tid()
+        width = scene.cam.width
+        px = pixel % width
+        py = pixel // width
+        a = wp.vec3(0.0)
+        n = wp.vec3(0.0)
+        z = float(0.0)
+        hits = int(0)
+        for k in range(n_samples):
+            rng = sample_rng(seed ^ 0x5A5A5A5, k, pixel)
+            jit = rand2(rng)
+            ray = generate_ray(scene.cam, float(px) + jit[0], float(py) + jit[1], rand2(rng))
+            hit = intersect(scene.geo, ray.o, ray.d, 1.0e30)
+            if hit.inst >= 0:
+                shape = scene.geo.inst_shape[hit.inst]
+                s = surface_at(scene.geo, hit, scene.shape_flip[shape] != 0)
+                m = scene.shape_material[shape]
+                b = load_bsdf(scene, m, s.uv)
+                b.wavelength_u = wp.randf(rng)
+                ns = s.ns
+                if wp.static(has_bump):
+                    if scene.mat.bump[m] >= 0:
+                        ns = bump_normal(scene, scene.mat.bump[m], s.uv, ns, s.dpdu, s.dpdv)
+                frame = frame_from_tangent(ns, s.dpdu)
+                wo_l = to_local(frame, -ray.d)
+                bs = BSDFSample()
+                u = wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng))
+                for j in range(wp.static(n_mat)):
+                    if b.kind == wp.static(kinds[j]):
+                        bs = wp.static(mods[j].sample)(b, wo_l, u)
+                if bs.pdf > 0.0 and wp.isfinite(bs.weight):
+                    a = a + wp.vec3(wp.clamp(bs.weight[0], 0.0, 1.0), wp.clamp(bs.weight[1], 0.0, 1.0),
+                                    wp.clamp(bs.weight[2], 0.0, 1.0))
+                n = n + ns
+                hits += 1
+                # depth as pbrt's: distance along the camera's z axis
+                fwd = wp.normalize(wp.vec3(scene.cam.to_world[0, 2], scene.cam.to_world[1, 2], scene.cam.to_world[2, 2]))
+                z = z + hit.t * wp.dot(ray.d, fwd)
+        inv = 1.0 / float(wp.max(n_samples, 1))
+        albedo[pixel] = a * inv
+        ln = wp.length(n)
+        if ln > 0.0:
+            n = n / ln
+        normal[pixel] = n
+        depth[pixel] = z / float(wp.max(hits, 1))
+
+    return first_hit
+
+
+def render_aovs(session, n_samples: int = 16) -> dict[str, np.ndarray]:
+    """Albedo (H, W, 3) in [0, 1] (box-filtered over ``n_samples``, 0 for the background), unit
+    shading normal (H, W, 3) and camera-space depth (H, W, 1) averaged over the samples that hit
+    (both 0 where nothing is hit)."""
+    ds = session.ds
+    W, H, dev = ds.width, ds.height, session.device
+    out = {"albedo": wp.zeros(W * H, dtype=wp.vec3, device=dev), "normal": wp.zeros(W * H, dtype=wp.vec3, device=dev),
+           "depth": wp.zeros(W * H, dtype=float, device=dev)}
+    wp.launch(aov_kernel(ds.features), dim=W * H,
+              inputs=[ds.struct, session.settings.seed, n_samples, out["albedo"], out["normal"], out["depth"]], device=dev)
+    return {k: v.numpy().reshape(H, W, -1) for k, v in out.items()}
