@@ -51,6 +51,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops (default: 0)")
     p.add_argument("--threads", type=int, help="CPU worker threads (default: all cores)")
     p.add_argument("--no-nee", action="store_true", help="BSDF sampling only (no light sampling): for checks")
+    p.add_argument("--rr-depth", type=int, help="Russian roulette from this path depth on (default 2; -1: off)")
     g = p.add_argument_group("long renders")
     g.add_argument("--time-limit", type=float, metavar="SECONDS", help="stop after the pass that crosses this")
     g.add_argument("--checkpoint", type=Path, metavar="PATH", help="write the accumulation here (atomically)")
@@ -158,7 +159,8 @@ def main(argv: list[str] | None = None) -> int:
         if args.error_log and not args.reference:
             raise RenderError("--error-log needs --reference REF.exr")
         w, h = args.res or (None, None)
-        settings = settings_for(scene, seed=args.seed, width=w, height=h, max_depth=args.max_depth, nee=not args.no_nee)
+        settings = settings_for(scene, seed=args.seed, width=w, height=h, max_depth=args.max_depth, nee=not args.no_nee,
+                                rr_depth=args.rr_depth)
         ref = None
         if args.reference:
             from renderer.imageio import read_image

@@ -20,7 +20,8 @@ from renderer.materials.bsdf import BSDF, MAX_SLOTS, BSDFSample, Slots
 from renderer.sampling import frame_from_tangent, max3, power_heuristic, rand2, sample_rng, to_local, to_world
 from renderer.textures import texture_eval
 
-#: Depth from which Russian roulette may end a path (pbrt-v4 starts after the second bounce).
+#: Depth from which Russian roulette may end a path by default (pbrt-v4 starts after the second
+#: bounce); a negative value in the settings turns roulette off.
 RR_DEPTH = 2
 #: Finite-difference step in texture space for bump mapping (pbrt's fallback without ray differentials).
 BUMP_DELTA = 0.0005
@@ -77,6 +78,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
 
     @wp.kernel(module="unique")
     def integrate(scene: Scene, seed: int, sample_start: int, n_samples: int, row_offset: int, max_depth: int,
+                  rr_depth: int,
                   film: wp.array(dtype=wp.vec3d), bad_samples: wp.array(dtype=int),
                   ray_count: wp.array(dtype=wp.float64)):
         tid = wp.tid()
@@ -198,7 +200,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
                 d = wi
                 depth += 1
                 u_rr = wp.randf(rng)
-                if depth >= RR_DEPTH:
+                if rr_depth >= 0 and depth >= rr_depth:
                     mb = max3(beta) * eta_scale
                     if mb < 1.0:
                         q = wp.max(0.0, 1.0 - mb)

@@ -17,6 +17,7 @@ from typing import Callable
 import numpy as np
 
 from renderer.errors import RenderError
+from renderer.integrator import RR_DEPTH
 from renderer.scene.description import SceneDescription
 
 @dataclass(frozen=True)
@@ -28,6 +29,7 @@ class RenderSettings:
     seed: int
     max_depth: int
     nee: bool = True
+    rr_depth: int = RR_DEPTH            # Russian roulette from this depth on; negative: never
 
 
 @dataclass
@@ -113,7 +115,7 @@ class RenderSession:
 
         def launch(band: np.ndarray) -> None:
             wp.launch(self.kernel, dim=len(band) * self.ds.width,
-                      inputs=[self.ds.struct, s.seed, sample, 1, int(band[0]), s.max_depth,
+                      inputs=[self.ds.struct, s.seed, sample, 1, int(band[0]), s.max_depth, s.rr_depth,
                               self.film.sum, self.film.bad, self.film.rays],
                       device=self.device)
             wp.synchronize_device(self.device)
