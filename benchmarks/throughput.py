@@ -68,7 +68,8 @@ def run_ours(res: int, spp: int, device: str, all_materials: bool) -> dict:
     api.render(desc, spp=spp, device=device, stats=stats)
     kind = "diffuse+dielectric+conductor" if all_materials else "diffuse-only"
     return {"name": f"ours ({kind} kernel, {device})", "seconds": stats.seconds,
-            "samples_per_s": stats.samples_per_second, "load_s": first.compile_seconds}
+            "samples_per_s": stats.samples_per_second, "rays_per_s": stats.rays_per_second,
+            "load_s": first.compile_seconds}
 
 
 def run_mitsuba(res: int, spp: int) -> list[dict]:
@@ -109,7 +110,8 @@ def run_mitsuba(res: int, spp: int) -> list[dict]:
             img = mi.render(scene, spp=spp)
             np.asarray(img)
             dt = time.perf_counter() - t0
-            out.append({"name": f"mitsuba {variant}", "seconds": dt, "samples_per_s": res * res * spp / dt, "load_s": float("nan")})
+            out.append({"name": f"mitsuba {variant}", "seconds": dt, "samples_per_s": res * res * spp / dt,
+                        "rays_per_s": float("nan"), "load_s": float("nan")})
     return out
 
 
@@ -120,15 +122,16 @@ def main() -> None:
     ap.add_argument("--device", default="cpu")
     a = ap.parse_args()
     print(f"\n{a.res}x{a.res}, {a.spp} spp, depth {DEPTH}, 82k-triangle sphere + floor, uniform sky\n")
-    print("| renderer | seconds | M samples/s | first kernel load s (cold = compile) | vs ours diffuse-only |")
-    print("|---|---:|---:|---:|---:|", flush=True)
+    print("| renderer | seconds | M samples/s | M rays/s | first kernel load s (cold = compile) | vs ours diffuse-only |")
+    print("|---|---:|---:|---:|---:|---:|", flush=True)
     base = None
     runs = [lambda: [run_ours(a.res, a.spp, a.device, False)], lambda: [run_ours(a.res, a.spp, a.device, True)],
             lambda: run_mitsuba(a.res, a.spp)]
     for run in runs:
         for r in run():
             base = base or r["samples_per_s"]
-            print(f"| {r['name']} | {r['seconds']:.2f} | {r['samples_per_s'] / 1e6:.3f} | {r['load_s']:.2f} | "
+            print(f"| {r['name']} | {r['seconds']:.2f} | {r['samples_per_s'] / 1e6:.3f} | {r['rays_per_s'] / 1e6:.3f} | "
+                  f"{r['load_s']:.2f} | "
                   f"{r['samples_per_s'] / base:.2f}x |", flush=True)
 
 

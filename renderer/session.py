@@ -83,6 +83,8 @@ class RenderSession:
         from renderer.integrator import integrator_kernel
 
         init_warp()
+        if device.startswith("cuda") and not wp.is_cuda_available():
+            raise RenderError(f'device "{device}" requested but no CUDA GPU is available (use --device cpu)')
         if settings.max_depth < 0:
             raise RenderError(f"max depth must be >= 0, got {settings.max_depth}")
         self.scene = scene

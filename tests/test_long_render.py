@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 from renderer.cli import main
-from renderer.errors import RenderError
 from renderer.imageio import read_exr
 from renderer.session import RenderSession, load_checkpoint, save_checkpoint
 from test_cli import write_scene
