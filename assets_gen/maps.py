@@ -91,7 +91,8 @@ def params_from_args(args: argparse.Namespace, cls: type) -> Any:
 def add_generator_parser(subparsers: Any, name: str, doc: str, cls: type,
                          run: Callable[[argparse.Namespace], list[str]]) -> argparse.ArgumentParser:
     """The subcommand every terrain generator has: its parameters, ``--seed``, ``--out``, ``--preview``."""
-    p = subparsers.add_parser(name, help=doc.splitlines()[0], description=doc,
+    summary = " ".join(doc.split("\n\n")[0].split()).split(". ")[0]
+    p = subparsers.add_parser(name, help=summary, description=doc,
                               formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     add_param_arguments(p, cls)
     p.add_argument("--seed", type=int, default=0, help="random seed; the same seed gives the same bytes")
