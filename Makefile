@@ -4,10 +4,12 @@ VENV := .venv
 BIN := $(VENV)/bin
 export WARP_CACHE_PATH ?= $(CURDIR)/.warp-cache
 SCENE ?= scenes/demo.pbrt
-OUT ?= out/demo.png
+OUT ?= out/$(notdir $(SCENE:.pbrt=.png))
 SPP ?=
+RES ?=
+FLAGS ?=
 
-.PHONY: render test install bench clean
+.PHONY: render test install bench clean props beach figures
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -19,9 +21,25 @@ $(VENV)/.installed: pyproject.toml | $(BIN)/python
 
 install: $(VENV)/.installed
 
+# builds <scene>.recipe.json first when the scene has one (only out-of-date assets are made)
 render: install
 	@mkdir -p $(dir $(OUT))
-	$(BIN)/render $(SCENE) -o $(OUT) $(if $(SPP),--spp $(SPP))
+	$(BIN)/assets-gen recipe $(SCENE) >/dev/null
+	$(BIN)/render $(SCENE) -o $(OUT) $(if $(SPP),--spp $(SPP)) $(if $(RES),--res $(RES)) $(FLAGS)
+
+# the props contact sheet (docs/images/props.png is this: 800x220, 64 spp, denoised)
+props:
+	$(MAKE) render SCENE=scenes/props.pbrt OUT=out/props.png RES=800x220 SPP=64 FLAGS=--denoise
+
+# a CPU preview of the beach; the full frame is `render scenes/beach.pbrt -o beach.exr --spp 4096 --device cuda`
+beach:
+	$(MAKE) render SCENE=scenes/beach.pbrt OUT=out/beach_preview.png RES=540x960 SPP=16 FLAGS=--denoise
+
+# the seed report's figures 2, 3 and 8 with our generated shell and maps
+figures:
+	$(MAKE) render SCENE=scenes/fig2_shell.pbrt OUT=out/fig2_shell.png
+	$(MAKE) render SCENE=scenes/fig3_heightmaps.pbrt OUT=out/fig3_heightmaps.png
+	$(MAKE) render SCENE=scenes/fig8_bump.pbrt OUT=out/fig8_bump.png
 
 test: install
 	$(BIN)/python -m pytest -q

@@ -13,7 +13,7 @@ import sys
 from assets_gen.common import GeneratorError
 
 #: Generator modules, in the order ``--help`` lists them.
-GENERATORS: tuple[str, ...] = ("seashell", "sunglasses", "umbrella", "palm", "sky")
+GENERATORS: tuple[str, ...] = ("seashell", "sunglasses", "umbrella", "palm", "sky", "dunes", "ripples", "grains", "maps", "recipe")
 
 
 def build_parser() -> argparse.ArgumentParser:

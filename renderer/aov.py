@@ -17,7 +17,7 @@ from renderer.geometry import intersect, surface_at
 from renderer.integrator import bump_normal, load_bsdf
 from renderer.materials import REGISTRY, kind_id
 from renderer.materials.bsdf import BSDFSample
-from renderer.sampling import frame_from_tangent, rand2, sample_rng, to_local
+from renderer.sampling import frame_from_tangent, sample_rng, to_local
 
 AOV_NAMES = ("albedo", "normal", "depth")
 #: Channel names per AOV in the EXR (layer.channel, as OpenEXR's multi-layer convention).
@@ -44,8 +44,9 @@ def aov_kernel(features: Features) -> wp.Kernel:
         hits = int(0)
         for k in range(n_samples):
             rng = sample_rng(seed ^ 0x5A5A5A5, k, pixel)
-            jit = rand2(rng)
-            ray = generate_ray(scene.cam, float(px) + jit[0], float(py) + jit[1], rand2(rng))
+            jit = wp.vec2(wp.randf(rng), wp.randf(rng))  # not rand2: Warp passes rng by value
+            ray = generate_ray(scene.cam, float(px) + jit[0], float(py) + jit[1],
+                               wp.vec2(wp.randf(rng), wp.randf(rng)))
             hit = intersect(scene.geo, ray.o, ray.d, 1.0e30)
             if hit.inst >= 0:
                 shape = scene.geo.inst_shape[hit.inst]

@@ -34,11 +34,14 @@ def init_warp(quiet: bool = True) -> None:
 def render(scene: SceneDescription, spp: int | None = None, device: str = "cpu", seed: int | None = None,
            width: int | None = None, height: int | None = None, max_depth: int | None = None,
            nee: bool = True, rr_depth: int | None = None, threads: int | None = None, time_limit: float | None = None,
-           progress: Callable[[int, int], None] | None = None, stats: RenderStats | None = None) -> np.ndarray:
+           progress: Callable[[int, int], None] | None = None, stats: RenderStats | None = None,
+           thin_film: str | None = None) -> np.ndarray:
     """Render and return linear RGB as float32 (H, W, 3). ``spp``, ``seed``, ``max_depth`` and the
-    resolution default to the scene file's values. ``progress(done, total)`` runs after every pass."""
+    resolution default to the scene file's values. ``progress(done, total)`` runs after every pass.
+    ``thin_film``: the thinfilm material's colour mode, ``rgb3`` or ``spectral:N`` (default spectral:32)."""
     session = RenderSession(scene, settings_for(scene, seed=seed, width=width, height=height, max_depth=max_depth,
-                                                nee=nee, rr_depth=rr_depth), device=device, threads=threads)
+                                                nee=nee, rr_depth=rr_depth, thin_film=thin_film),
+                            device=device, threads=threads)
     spp = scene.sampler.spp if spp is None else int(spp)
     on_pass = (lambda s: progress(s.film.spp, spp)) if progress else None
     result = session.run(spp, time_limit=time_limit, on_pass=on_pass)
@@ -49,11 +52,14 @@ def render(scene: SceneDescription, spp: int | None = None, device: str = "cpu",
 
 def settings_for(scene: SceneDescription, seed: int | None = None, width: int | None = None,
                  height: int | None = None, max_depth: int | None = None, nee: bool = True,
-                 rr_depth: int | None = None) -> RenderSettings:
+                 rr_depth: int | None = None, thin_film: str | None = None) -> RenderSettings:
     """Render settings: explicit values, else the scene file's (and the integrator's defaults)."""
     from renderer.integrator import RR_DEPTH
+    from renderer.materials.thinfilm import DEFAULT_MODE, spectral_samples
 
+    thin_film = thin_film or DEFAULT_MODE
+    spectral_samples(thin_film)  # refuse an unknown mode before any device work
     return RenderSettings(width=width or scene.film.width, height=height or scene.film.height,
                           seed=scene.sampler.seed if seed is None else int(seed),
                           max_depth=scene.integrator.max_depth if max_depth is None else int(max_depth), nee=nee,
-                          rr_depth=RR_DEPTH if rr_depth is None else int(rr_depth))
+                          rr_depth=RR_DEPTH if rr_depth is None else int(rr_depth), thin_film=thin_film)

@@ -52,6 +52,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--threads", type=int, help="CPU worker threads (default: all cores)")
     p.add_argument("--no-nee", action="store_true", help="BSDF sampling only (no light sampling): for checks")
     p.add_argument("--rr-depth", type=int, help="Russian roulette from this path depth on (default 2; -1: off)")
+    p.add_argument("--thin-film", metavar="MODE", help="thinfilm colour: rgb3 (the seed's 3 wavelengths) or "
+                   "spectral:N (N jittered wavelengths; default spectral:32)")
     g = p.add_argument_group("long renders")
     g.add_argument("--time-limit", type=float, metavar="SECONDS", help="stop after the pass that crosses this")
     g.add_argument("--checkpoint", type=Path, metavar="PATH", help="write the accumulation here (atomically)")
@@ -160,7 +162,7 @@ def main(argv: list[str] | None = None) -> int:
             raise RenderError("--error-log needs --reference REF.exr")
         w, h = args.res or (None, None)
         settings = settings_for(scene, seed=args.seed, width=w, height=h, max_depth=args.max_depth, nee=not args.no_nee,
-                                rr_depth=args.rr_depth)
+                                rr_depth=args.rr_depth, thin_film=args.thin_film)
         ref = None
         if args.reference:
             from renderer.imageio import read_image

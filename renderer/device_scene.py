@@ -11,7 +11,8 @@ from renderer.camera import Camera, build_camera
 from renderer.errors import SceneError
 from renderer.geometry import Geometry, GeometryData, build_geometry
 from renderer.lights import AREA, DISTANT, LightTable, Lights
-from renderer.materials import Materials, build_materials
+from renderer.materials import Materials, build_materials, disney, thinfilm
+from renderer.optics import RgbWeightTable, make_rgb_weight_table
 from renderer.scene.description import SceneDescription
 from renderer.textures import Textures, TextureTable
 
@@ -26,6 +27,8 @@ class Scene:
     shape_material: wp.array(dtype=int)
     shape_light: wp.array(dtype=int)
     shape_flip: wp.array(dtype=int)
+    spectral: RgbWeightTable    # the thin-film BSDF's spectrum → RGB weights (1 dummy entry if unused)
+    spectral_n: int             # its wavelengths per evaluation, 0 for rgb3
 
 
 @dataclass(frozen=True)
@@ -38,6 +41,7 @@ class Features:
     area: bool
     soft_distant: bool
     nee: bool = True
+    subsurface: bool = False    # some disney material scatters below its surface (renderer.subsurface)
 
 
 @dataclass
@@ -51,8 +55,20 @@ class DeviceScene:
     geometry: GeometryData | None = None
 
 
+def _spectral_table(needed: bool, thin_film: str, device: str) -> tuple[RgbWeightTable, int]:
+    """The colour-matching table the thin-film BSDF integrates with, uploaded only when a thinfilm
+    material is in the scene and the mode samples wavelengths; otherwise a one-entry stand-in."""
+    n = thinfilm.spectral_samples(thin_film)
+    if needed and n > 0:
+        return make_rgb_weight_table(device), n
+    table = RgbWeightTable()
+    table.w = wp.zeros(1, dtype=wp.vec3, device=device)
+    table.step = 1.0
+    return table, n
+
+
 def upload(desc: SceneDescription, device: str, width: int | None = None, height: int | None = None,
-           nee: bool = True) -> DeviceScene:
+           nee: bool = True, thin_film: str = thinfilm.DEFAULT_MODE) -> DeviceScene:
     width = width or desc.film.width
     height = height or desc.film.height
     if not desc.instance_sets:
@@ -124,6 +140,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     # pbrt's handedness swap, so together they orient normals as pbrt does
     flip = [int(s.reverse_orientation) for s in desc.shapes] or [0]
     S.shape_flip = wp.array(np.array(flip, np.int32), dtype=int, device=device)
+    S.spectral, S.spectral_n = _spectral_table(thinfilm.NAME in used, thin_film, device)
 
     feats = Features(
         materials=tuple(sorted(used)),
@@ -132,6 +149,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
         area=AREA in lights.kind,
         soft_distant=any(k == DISTANT and c < 1.0 for k, c in zip(lights.kind, lights.cos_max)),
         nee=nee,
+        subsurface=any(m.kind == disney.NAME and disney.has_subsurface(m.params) for m in desc.materials),
     )
-    keep = [geo, mat_keep, tex_keep, light_keep, S.shape_material, S.shape_light, S.shape_flip]
+    keep = [geo, mat_keep, tex_keep, light_keep, S.shape_material, S.shape_light, S.shape_flip, S.spectral.w]
     return DeviceScene(struct=S, features=feats, device=device, width=width, height=height, keep=keep, geometry=geo)

@@ -17,7 +17,8 @@ from renderer.geometry import intersect, occluded, offset_origin, ray_epsilon, s
 from renderer.lights import DISTANT, area_emitted, area_pdf, distant_cone_radiance, env_pdf, env_radiance, sample_light
 from renderer.materials import REGISTRY, kind_id
 from renderer.materials.bsdf import BSDF, MAX_SLOTS, BSDFSample, Slots
-from renderer.sampling import frame_from_tangent, max3, power_heuristic, rand2, sample_rng, to_local, to_world
+from renderer.sampling import frame_from_tangent, max3, power_heuristic, sample_rng, to_local, to_world
+from renderer.subsurface import subsurface_scatter
 from renderer.textures import texture_eval
 
 #: Depth from which Russian roulette may end a path by default (pbrt-v4 starts after the second
@@ -41,6 +42,8 @@ def load_bsdf(scene: Scene, m: int, uv: wp.vec2) -> BSDF:
     b = BSDF()
     b.kind = scene.mat.kind[m]
     b.p = p
+    b.spectral = scene.spectral
+    b.spectral_n = scene.spectral_n
     return b
 
 
@@ -75,6 +78,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
     has_area = features.area
     has_soft = features.soft_distant
     nee = features.nee
+    has_sss = features.subsurface
 
     @wp.kernel(module="unique")
     def integrate(scene: Scene, seed: int, sample_start: int, n_samples: int, row_offset: int, max_depth: int,
@@ -92,8 +96,9 @@ def integrator_kernel(features: Features) -> wp.Kernel:
         n_rays = int(0)
         for k in range(n_samples):
             rng = sample_rng(seed, sample_start + k, pixel)
-            jit = rand2(rng)
-            ray = generate_ray(scene.cam, float(px) + jit[0], float(py) + jit[1], rand2(rng))
+            jit = wp.vec2(wp.randf(rng), wp.randf(rng))  # not rand2: Warp passes rng by value
+            ray = generate_ray(scene.cam, float(px) + jit[0], float(py) + jit[1],
+                               wp.vec2(wp.randf(rng), wp.randf(rng)))
             o = ray.o
             d = ray.d
             L = wp.vec3(0.0)
@@ -143,6 +148,14 @@ def integrator_kernel(features: Features) -> wp.Kernel:
                 m = scene.shape_material[shape]
                 b = load_bsdf(scene, m, s.uv)
                 b.wavelength_u = wp.randf(rng)
+                if wp.static(has_sss):
+                    # subsurface scattering may move the vertex to where light leaves the object
+                    sss = subsurface_scatter(scene, b, s, hit.inst, wo, wp.randi(rng))
+                    n_rays += sss.rays
+                    beta = wp.cw_mul(beta, sss.weight)
+                    s = sss.s
+                    b = sss.b
+                    wo = sss.wo
                 ns = s.ns
                 if wp.static(has_bump):
                     bt = scene.mat.bump[m]
@@ -153,7 +166,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
 
                 # next-event estimation: one light, MIS-weighted against BSDF sampling
                 u_sel = wp.randf(rng)
-                u_light = rand2(rng)
+                u_light = wp.vec2(wp.randf(rng), wp.randf(rng))
                 if wp.static(nee):
                     if n_lights > 0:
                         ls = sample_light(scene.lights, s.p, u_sel, u_light)

@@ -37,6 +37,9 @@ def sample_rng(seed: int, sample_index: int, pixel: int) -> wp.uint32:
 
 @wp.func
 def rand2(state: wp.uint32) -> wp.vec2:
+    """Two uniforms from ``state``. CAUTION: Warp passes scalars to a ``wp.func`` by value, so the
+    caller's state does NOT advance: two calls return the same pair. Inline
+    ``wp.vec2(wp.randf(rng), wp.randf(rng))`` in kernels instead."""
     a = wp.randf(state)
     b = wp.randf(state)
     return wp.vec2(a, b)

@@ -18,6 +18,7 @@ import numpy as np
 
 from renderer.errors import RenderError
 from renderer.integrator import RR_DEPTH
+from renderer.materials.thinfilm import DEFAULT_MODE as THIN_FILM_DEFAULT
 from renderer.scene.description import SceneDescription
 
 @dataclass(frozen=True)
@@ -30,6 +31,7 @@ class RenderSettings:
     max_depth: int
     nee: bool = True
     rr_depth: int = RR_DEPTH            # Russian roulette from this depth on; negative: never
+    thin_film: str = THIN_FILM_DEFAULT  # thin-film colour mode: rgb3 or spectral:N
 
 
 @dataclass
@@ -90,7 +92,8 @@ class RenderSession:
         self.scene = scene
         self.settings = settings
         self.device = device
-        self.ds = upload(scene, device, settings.width, settings.height, nee=settings.nee)
+        self.ds = upload(scene, device, settings.width, settings.height, nee=settings.nee,
+                         thin_film=settings.thin_film)
         W, H = self.ds.width, self.ds.height
         self.film = Film(W, H, device)
         self.kernel = integrator_kernel(self.ds.features)

@@ -14,13 +14,13 @@ import numpy as np
 import warp as wp
 
 from renderer.errors import SceneError
-from renderer.materials import conductor, dielectric, diffuse
+from renderer.materials import conductor, dielectric, diffuse, disney, thinfilm
 from renderer.materials.bsdf import MAX_SLOTS
 from renderer.scene.description import MaterialDesc, TextureDesc
 from renderer.scene.params import ParamSet
 from renderer.textures import TextureTable
 
-REGISTRY: dict[str, ModuleType] = {m.NAME: m for m in (diffuse, dielectric, conductor)}
+REGISTRY: dict[str, ModuleType] = {m.NAME: m for m in (diffuse, dielectric, conductor, thinfilm, disney)}
 
 
 def kind_id(name: str) -> int:

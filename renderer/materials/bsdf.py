@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import warp as wp
 
+from renderer.optics import RgbWeightTable
+
 MAX_SLOTS = 16
 Slots = wp.types.matrix(shape=(MAX_SLOTS, 3), dtype=wp.float32)
 
@@ -21,6 +23,8 @@ class BSDF:
     kind: int
     p: Slots
     wavelength_u: float     # a per-sample random number for materials that sample wavelengths
+    spectral: RgbWeightTable  # spectrum → RGB weights for those materials (the scene's, see device_scene)
+    spectral_n: int         # wavelengths per evaluation; 0: the seed's three (rgb3)
 
 
 @wp.struct

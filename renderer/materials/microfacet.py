@@ -81,3 +81,24 @@ def roughness_to_alpha(r: wp.vec2, remap: float) -> wp.vec2:
     if remap > 0.5:
         return wp.vec2(wp.sqrt(wp.max(r[0], 0.0)), wp.sqrt(wp.max(r[1], 0.0)))
     return r
+
+
+@wp.func
+def gtr1_D(cos_h: float, alpha: float) -> float:
+    """Burley's GTR1 ("generalised Trowbridge–Reitz", γ = 1) distribution of the clearcoat: a
+    longer tail than GGX, normalised so that ∫ D cos θh dω = 1 (needs alpha < 1)."""
+    if cos_h <= 0.0:
+        return 0.0
+    a2 = alpha * alpha
+    return (a2 - 1.0) / (PI * wp.log(a2) * (1.0 + (a2 - 1.0) * cos_h * cos_h))
+
+
+@wp.func
+def gtr1_sample(alpha: float, u: wp.vec2) -> wp.vec3:
+    """A normal distributed as D(wm) cos θm (inverting GTR1's closed-form CDF); pdf = gtr1_D · cos θm."""
+    a2 = alpha * alpha
+    cos2 = (1.0 - wp.pow(a2, 1.0 - u[0])) / (1.0 - a2)
+    cos_t = wp.sqrt(wp.clamp(cos2, 0.0, 1.0))
+    sin_t = wp.sqrt(wp.max(0.0, 1.0 - cos_t * cos_t))
+    phi = 2.0 * PI * u[1]
+    return wp.vec3(sin_t * wp.cos(phi), sin_t * wp.sin(phi), cos_t)

@@ -1,0 +1,182 @@
+"""The seed's ``thinfilm`` (an extension; pbrt has no such material): a smooth interface coated
+with one thin dielectric film, whose interference colours the specular reflection.
+
+Layers, from the side the normal points to: outer medium ``eta_outer`` | film ``eta_film``,
+``thickness`` nm | substrate ``eta_inner`` + i ``k_inner``. Reflectance R and transmittance T
+come from :mod:`renderer.optics` (Airy summation, s and p averaged), converted to RGB either at
+the seed's three wavelengths (``rgb3``) or by integrating N jittered wavelengths against the CIE
+observer (``spectral:N``, the render option). Lobes:
+
+* R: a delta mirror lobe.
+* T (``transmission`` true): a delta refraction into a clear substrate, radiance scaled by 1/eta'²
+  as in ``dielectric``. Hits from the back swap the outer and inner media; total internal
+  reflection comes out of the optics (T = 0, R = 1).
+* Opaque substrate (``transmission`` false, the default): two-sided. What the film does not
+  reflect enters the substrate; a Lambertian substrate of albedo ``reflectance`` (default 0:
+  everything is absorbed, like a metal or black glass) sends it back out. Its lobe is
+  f = reflectance (1 − R(wo)) (1 − R(wi)) / π: light must cross the film on the way in and on
+  the way out, which keeps it reciprocal and energy conserving (R + (1 − R)·reflectance ≤ 1);
+  light the film reflects back down into the substrate is dropped (a slight darkening).
+"""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import warp as wp
+
+from renderer.errors import SceneError
+from renderer.materials.bsdf import BSDF, BSDFSample, failed_sample, reflect_z, same_hemisphere
+from renderer.materials.dielectric import _refract
+from renderer.optics import thin_film_rgb3, thin_film_rgb_sampled
+from renderer.sampling import INV_PI, cosine_hemisphere, max3
+
+if TYPE_CHECKING:
+    from renderer.materials import SlotBuilder
+
+NAME = "thinfilm"
+
+#: The render option's default: 32 jittered wavelengths per evaluation (see docs/thinfilm.md).
+DEFAULT_MODE = "spectral:32"
+
+ETA_OUTER, ETA_FILM, ETA_INNER, K_INNER, THICKNESS, THICKNESS_MAP, THICKNESS_SCALE, TRANSMISSION, BASE = range(9)
+
+
+def spectral_samples(mode: str) -> int:
+    """Wavelengths per thin-film evaluation for a render mode: ``rgb3`` → 0, ``spectral:N`` → N."""
+    if mode == "rgb3":
+        return 0
+    name, _, count = mode.partition(":")
+    if name == "spectral" and count.isdigit() and int(count) >= 1:
+        return int(count)
+    raise ValueError(f"unknown thin-film mode {mode!r}: use 'rgb3' or 'spectral:N' (N >= 1)")
+
+
+def slots(s: SlotBuilder) -> list[int]:
+    """k_inner, thicknessscale and transmission are plain values: the check below needs them."""
+    transmission = bool(s.params.bool("transmission", False))
+    k_inner = s.params.float("k_inner", 0.0, min=0.0)
+    has_base = "reflectance" in s.params
+    if transmission and (k_inner > 0.0 or has_base):
+        raise SceneError('thinfilm: "transmission" needs a clear substrate (no "k_inner", no "reflectance")',
+                         s.loc)
+    return [
+        s.float("eta_outer", 1.0, lo=1.0e-3),
+        s.float("eta_film", 1.55, lo=1.0e-3),
+        s.float("eta_inner", 1.66, lo=1.0e-3),
+        s.const(k_inner),
+        s.float("thickness", 500.0, lo=0.0),
+        s.float("thicknessmap", 0.0),
+        s.const(s.params.float("thicknessscale", 1.0)),
+        s.const(1.0 if transmission else 0.0),
+        s.rgb("reflectance", 0.0, lo=0.0, hi=1.0),
+    ]
+
+
+@wp.func
+def _transmissive(b: BSDF) -> bool:
+    return b.p[TRANSMISSION][0] > 0.5
+
+
+@wp.func
+def film_reflect_transmit(b: BSDF, w: wp.vec3):
+    """RGB (R, T) of the coating for light arriving along w, each clipped to [0, 1]: a film colour
+    outside the sRGB gamut has a negative channel, which a path's throughput must not carry.
+
+    R + T is not clipped. With rgb3 it is 1 to float precision for lossless media; with
+    spectral:N it is the jittered estimate of white, 1 ± 1e-3 at N = 32 and exactly 1 on average,
+    so clipping the sum would bias every image darker (about 0.3 % in a glass-sphere furnace)."""
+    n0 = b.p[ETA_OUTER][0]
+    n2 = wp.vec2(b.p[ETA_INNER][0], b.p[K_INNER][0])
+    if w[2] < 0.0 and _transmissive(b):
+        n0 = b.p[ETA_INNER][0]
+        n2 = wp.vec2(b.p[ETA_OUTER][0], 0.0)
+    n1 = wp.vec2(b.p[ETA_FILM][0], 0.0)
+    d = wp.max(b.p[THICKNESS][0] + b.p[THICKNESS_SCALE][0] * b.p[THICKNESS_MAP][0], 0.0)
+    cos0 = wp.abs(w[2])
+    r = wp.vec3(0.0)
+    t = wp.vec3(0.0)
+    if b.spectral_n > 0:
+        r, t = thin_film_rgb_sampled(cos0, n0, n1, n2, d, b.spectral_n, b.wavelength_u, b.spectral)
+    else:
+        r, t = thin_film_rgb3(cos0, n0, n1, n2, d)
+    r = wp.min(wp.max(r, wp.vec3(0.0)), wp.vec3(1.0))
+    t = wp.min(wp.max(t, wp.vec3(0.0)), wp.vec3(1.0))
+    if not _transmissive(b):
+        t = wp.vec3(0.0)
+    return r, t
+
+
+@wp.func
+def _mean(v: wp.vec3) -> float:
+    return (v[0] + v[1] + v[2]) / 3.0
+
+
+@wp.func
+def _base_lobe(b: BSDF, r_o: wp.vec3) -> wp.vec3:
+    """reflectance (1 − R(wo)): the substrate's share before the exit through the film."""
+    return wp.cw_mul(b.p[BASE], wp.vec3(1.0) - r_o)
+
+
+@wp.func
+def pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> float:
+    """The substrate lobe's density: its selection probability in ``sample`` times cos/π."""
+    if _transmissive(b) or max3(b.p[BASE]) <= 0.0 or not same_hemisphere(wo, wi):
+        return 0.0
+    r, t = film_reflect_transmit(b, wo)
+    p_base = _mean(_base_lobe(b, r))
+    total = _mean(r) + _mean(t) + p_base
+    if total <= 0.0:
+        return 0.0
+    return p_base / total * wp.abs(wi[2]) * INV_PI
+
+
+@wp.func
+def eval(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> wp.vec3:
+    if _transmissive(b) or max3(b.p[BASE]) <= 0.0 or not same_hemisphere(wo, wi):
+        return wp.vec3(0.0)
+    r_o, t_o = film_reflect_transmit(b, wo)
+    r_i, t_i = film_reflect_transmit(b, wi)
+    return wp.cw_mul(_base_lobe(b, r_o), wp.vec3(1.0) - r_i) * INV_PI
+
+
+@wp.func
+def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+    """Pick the mirror, the refraction or the substrate in proportion to their mean RGB albedo."""
+    r, t = film_reflect_transmit(b, wo)
+    base = _base_lobe(b, r)
+    p_r = _mean(r)
+    p_t = _mean(t)
+    total = p_r + p_t + _mean(base)
+    if total <= 0.0:
+        return failed_sample()
+    p_r = p_r / total
+    p_t = p_t / total
+    s = BSDFSample()
+    if u[2] < p_r:
+        s.wi = reflect_z(wo)
+        s.weight = r / p_r
+        s.pdf = p_r
+        s.specular = True
+        return s
+    if u[2] < p_r + p_t:
+        refr = _refract(wo, wp.vec3(0.0, 0.0, 1.0), b.p[ETA_INNER][0] / b.p[ETA_OUTER][0])
+        if refr[3] == 0.0:
+            return failed_sample()
+        s.wi = wp.vec3(refr[0], refr[1], refr[2])
+        s.weight = t / (p_t * refr[3] * refr[3])
+        s.pdf = p_t
+        s.eta = refr[3]
+        s.specular = True
+        return s
+    wi = cosine_hemisphere(wp.vec2(u[0], u[1]))
+    if wo[2] < 0.0:
+        wi = wp.vec3(wi[0], wi[1], -wi[2])
+    p_base = _mean(base) / total
+    s.pdf = p_base * wp.abs(wi[2]) * INV_PI
+    if s.pdf <= 0.0:
+        return failed_sample()
+    r_i, t_i = film_reflect_transmit(b, wi)
+    s.wi = wi
+    s.weight = wp.cw_mul(base, wp.vec3(1.0) - r_i) / p_base
+    s.specular = False
+    return s

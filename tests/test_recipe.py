@@ -1,0 +1,182 @@
+"""Asset recipes (assets_gen/recipe.py): incremental, deterministic builds and clear errors."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from assets_gen import cli, recipe
+from assets_gen.recipe import RecipeError
+
+
+def _recipe(tmp: Path, assets: list[dict], name: str = "scene.recipe.json") -> Path:
+    path = tmp / name
+    path.write_text(json.dumps({"recipe": 1, "assets": assets}, indent=1))
+    return path
+
+
+def _small(sky_res: int = 16, scale: float = 0.05) -> list[dict]:
+    return [
+        {"name": "sky", "generator": "sky", "seed": 0, "out": "assets/t/sky",
+         "params": {"resolution": sky_res, "layout": "latlong", "elevation_deg": 30}},
+        {"name": "lights", "generator": "sky-lights", "out": "assets/t/lights",
+         "params": {"sky": "assets/t/sky", "scale": scale, "sun": "blackbody"}},
+        {"name": "glasses", "generator": "sunglasses", "seed": 3, "out": "assets/t/glasses",
+         "params": {"lens_width": 0.05}},
+    ]
+
+
+def _snapshot(folder: Path) -> dict[str, tuple[int, bytes]]:
+    return {p.relative_to(folder).as_posix(): (p.stat().st_mtime_ns, p.read_bytes())
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def test_second_build_is_skipped(tmp_path):
+    r = _recipe(tmp_path, _small())
+    first = recipe.build(r, log=None)
+    assert [x.built for x in first] == [True, True, True]
+    assert (tmp_path / "assets/t/sky/sky_latlong.exr").is_file()
+    assert (tmp_path / "assets/t/lights/lights.pbrt").is_file()
+    before = _snapshot(tmp_path / "assets")
+    second = recipe.build(r, log=None)
+    assert [x.built for x in second] == [False, False, False]
+    assert _snapshot(tmp_path / "assets") == before            # not a byte, not an mtime touched
+    assert {p.name for p in second[0].outputs} == {"sky.json", "sky_latlong.exr"}
+
+
+def test_changed_parameter_rebuilds_that_entry_and_its_dependants(tmp_path):
+    r = _recipe(tmp_path, _small(sky_res=16))
+    recipe.build(r, log=None)
+    glasses = _snapshot(tmp_path / "assets/t/glasses")
+    old_sky = (tmp_path / "assets/t/sky/sky_latlong.exr").read_bytes()
+    _recipe(tmp_path, _small(sky_res=32))
+    res = recipe.build(r, log=None)
+    # the sky changed; the lights read the sky folder, so they are redone too; the glasses are not
+    assert [x.built for x in res] == [True, True, False]
+    assert (tmp_path / "assets/t/sky/sky_latlong.exr").read_bytes() != old_sky
+    assert _snapshot(tmp_path / "assets/t/glasses") == glasses
+    # a parameter of the last step only
+    _recipe(tmp_path, _small(sky_res=32, scale=0.1))
+    assert [x.built for x in recipe.build(r, log=None)] == [False, True, False]
+    assert '"float scale" [0.1]' in (tmp_path / "assets/t/lights/lights.pbrt").read_text()
+
+
+def test_missing_output_or_force_rebuilds(tmp_path):
+    r = _recipe(tmp_path, _small())
+    recipe.build(r, log=None)
+    (tmp_path / "assets/t/glasses/frame.ply").unlink()
+    assert [x.built for x in recipe.build(r, log=None)] == [False, False, True]
+    assert (tmp_path / "assets/t/glasses/frame.ply").is_file()
+    assert all(x.built for x in recipe.build(r, force=True, log=None))
+    assert [x.built for x in recipe.build(r, only=["sky"], force=True, log=None)] == [True]
+
+
+def test_same_seed_same_bytes(tmp_path):
+    r = _recipe(tmp_path, _small())
+    recipe.build(r, root=tmp_path / "a", log=None)
+    recipe.build(r, root=tmp_path / "b", log=None)
+    a = {k: v[1] for k, v in _snapshot(tmp_path / "a/assets").items()}
+    b = {k: v[1] for k, v in _snapshot(tmp_path / "b/assets").items()}
+    assert a.keys() == b.keys() and len(a) >= 8
+    assert a == b
+
+
+def test_quick_overrides(tmp_path):
+    assets = _small(sky_res=64)
+    assets[0]["quick"] = {"resolution": 8}
+    r = _recipe(tmp_path, assets)
+    recipe.build(r, quick=True, log=None)
+    stamp = json.loads((tmp_path / "assets/t/sky" / recipe.STAMP).read_text())
+    assert stamp["params"]["resolution"] == 8
+    # switching back to the full recipe is a change: it rebuilds
+    assert recipe.build(r, log=None)[0].built
+
+
+def test_scene_recipe_lookup(tmp_path):
+    (tmp_path / "scene.pbrt").write_text("WorldBegin\n")
+    assert recipe.recipe_for(tmp_path / "scene.pbrt") is None
+    r = _recipe(tmp_path, _small())
+    assert recipe.recipe_for(tmp_path / "scene.pbrt") == r
+
+
+@pytest.mark.parametrize("entry, message", [
+    ({"name": "x", "generator": "nosuch", "out": "assets/x"}, "unknown generator 'nosuch'"),
+    ({"name": "x", "generator": "sky", "out": "../elsewhere"}, "inside assets/"),
+    ({"name": "x", "generator": "sky", "out": "assets/x", "params": {"resolution": -4}}, "resolution"),
+    ({"name": "x", "generator": "sky", "out": "assets/x", "params": {"no_such_option": 1}},
+     "unrecognized arguments: --no-such-option"),
+    ({"name": "x", "generator": "sky", "out": "assets/x", "params": {"layout": "cube"}}, "invalid choice"),
+    ({"name": "x", "generator": "sky", "out": "assets/x", "seed": -1}, '"seed"'),
+    ({"name": "x", "generator": "sky", "out": "assets/x", "params": {"seed": 2}}, 'give "seed" as a key'),
+    ({"name": "x", "generator": "sky", "out": "assets/x", "colour": 1}, "unknown key(s) ['colour']"),
+    ({"generator": "sky", "out": "assets/x"}, '"name" must be a non-empty string'),
+    ({"name": "x", "generator": "sky-lights", "out": "assets/x", "params": {"sky": "assets/none"}},
+     "sky.json not found"),
+])
+def test_bad_entry_gives_a_clear_error(tmp_path, entry, message):
+    r = _recipe(tmp_path, [entry])
+    with pytest.raises(RecipeError) as e:
+        recipe.build(r, log=None)
+    text = str(e.value)
+    assert message in text
+    assert "scene.recipe.json" in text                      # names the recipe
+    assert "\n" not in text                                 # one line
+    assert not (tmp_path / "assets/x" / recipe.STAMP).exists()
+
+
+def test_bad_recipe_files(tmp_path):
+    with pytest.raises(RecipeError, match="not found"):
+        recipe.build(tmp_path / "missing.recipe.json", log=None)
+    bad = tmp_path / "bad.recipe.json"
+    bad.write_text('{"assets": [\n  {"name": }\n]}')
+    with pytest.raises(RecipeError, match=r"bad.recipe.json:2: not valid JSON"):
+        recipe.build(bad, log=None)
+    dup = _recipe(tmp_path, [{"name": "a", "generator": "sky", "out": "assets/s"},
+                             {"name": "b", "generator": "sky", "out": "assets/s/"}], "dup.recipe.json")
+    with pytest.raises(RecipeError, match="already used by 'a'"):
+        recipe.build(dup, log=None)
+
+
+def test_cli_subcommand(tmp_path, capsys):
+    r = _recipe(tmp_path, _small())
+    assert cli.main(["recipe", str(r)]) == 0
+    assert "lights.pbrt" in capsys.readouterr().out
+    assert cli.main(["recipe", str(r)]) == 0
+    assert capsys.readouterr().out == ""                    # nothing written the second time
+    bad = _recipe(tmp_path, [{"name": "x", "generator": "nosuch", "out": "assets/x"}], "bad.recipe.json")
+    assert cli.main(["recipe", str(bad)]) == 2
+    assert "unknown generator 'nosuch'" in capsys.readouterr().err
+
+
+def test_scene_inputs_include_their_includes(tmp_path):
+    """An entry that names a .pbrt file depends on the files it includes (e.g. grains on the camera)."""
+    (tmp_path / "cam.pbrt").write_text('LookAt 0 1 0  0 0 1  0 1 0\n')
+    (tmp_path / "view.pbrt").write_text('Include "cam.pbrt"\nWorldBegin\n')
+    entry = {"name": "s", "generator": "sky", "out": "assets/s",
+             "params": {"resolution": 8, "layout": "latlong", "ground_albedo": 0.1}}
+    r = _recipe(tmp_path, [entry])
+    e = recipe.load(r)[0]
+    e.params["unused_file"] = "view.pbrt"      # not passed to a generator: just hashed
+    import os
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        before = recipe.entry_hash(e)
+        (tmp_path / "cam.pbrt").write_text('LookAt 0 2 0  0 0 1  0 1 0\n')
+        assert recipe.entry_hash(e) != before
+    finally:
+        os.chdir(cwd)
+
+
+def test_generator_reading_a_bad_scene_names_the_entry(tmp_path):
+    """Errors from inside a generator (here: the grain generator parsing a broken camera scene)
+    come out as one RecipeError naming the recipe and the entry."""
+    (tmp_path / "view.pbrt").write_text('Camera "orthographic"\nWorldBegin\n')
+    r = _recipe(tmp_path, [
+        {"name": "dunes", "generator": "dunes", "out": "assets/d",
+         "params": {"size_x": 2, "size_z": 2, "spacing": 0.25, "preview": False}},
+        {"name": "grains", "generator": "grains", "out": "assets/g",
+         "params": {"surface": "assets/d/dunes.ply", "scene": "view.pbrt", "count": 10, "preview": False}}])
+    with pytest.raises(RecipeError, match=r"scene.recipe.json: asset 1 'grains' \(grains\): .*orthographic"):
+        recipe.build(r, log=None)
