@@ -49,6 +49,7 @@ class Surface:
     dpdv: wp.vec3
     shape: int
     area: float                              # world-space area of the hit triangle
+    err: float                               # Σ b_i |p_i|: the scale of the float32 error in p
 
 
 @wp.func
@@ -106,6 +107,7 @@ def surface_at(geo: Geometry, hit: Hit, flip: bool) -> Surface:
     b2 = 1.0 - b0 - b1
     s = Surface()
     s.p = p0 * b0 + p1 * b1 + p2 * b2
+    s.err = b0 * _max_abs(p0) + b1 * _max_abs(p1) + b2 * _max_abs(p2)
     e1 = p1 - p0
     e2 = p2 - p0
     c = wp.cross(e1, e2)
@@ -160,20 +162,27 @@ def surface_at(geo: Geometry, hit: Hit, flip: bool) -> Surface:
 
 
 @wp.func
-def offset_origin(p: wp.vec3, ng: wp.vec3, w: wp.vec3) -> wp.vec3:
+def _max_abs(p: wp.vec3) -> float:
+    return max3(wp.vec3(wp.abs(p[0]), wp.abs(p[1]), wp.abs(p[2])))
+
+
+@wp.func
+def offset_origin(s: Surface, w: wp.vec3) -> wp.vec3:
     """Move a spawned ray's origin off the surface along the geometric normal, on the side of
-    ``w``, by a distance relative to |p| (float32 spacing grows with magnitude), so 0.3 mm grains
-    and 1 km dunes both escape self-intersection."""
-    eps = 1.0e-7 + 4.0e-6 * max3(wp.vec3(wp.abs(p[0]), wp.abs(p[1]), wp.abs(p[2])))
-    if wp.dot(w, ng) < 0.0:
+    ``w``. The distance scales with the float32 error of the hit point, which grows with the
+    magnitude of the triangle's vertices (pbrt's bound Σ b_i |p_i|, with a safety factor for the
+    intersector's barycentrics), so 0.3 mm grains and 1 km dunes both escape self-intersection
+    without light leaking through either."""
+    eps = 1.0e-7 + 4.0e-6 * wp.max(s.err, _max_abs(s.p))
+    if wp.dot(w, s.ng) < 0.0:
         eps = -eps
-    return p + ng * eps
+    return s.p + s.ng * eps
 
 
 @wp.func
 def ray_epsilon(p: wp.vec3) -> float:
     """The same relative tolerance, for shortening shadow rays towards a point on a light."""
-    return 1.0e-7 + 8.0e-6 * max3(wp.vec3(wp.abs(p[0]), wp.abs(p[1]), wp.abs(p[2])))
+    return 1.0e-7 + 8.0e-6 * _max_abs(p)
 
 
 @dataclass

@@ -183,7 +183,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
                                 f = wp.vec3(0.0)
                             f = f * wp.abs(wi_l[2])
                             if max3(f) > 0.0:
-                                origin = offset_origin(s.p, s.ng, ls.wi)
+                                origin = offset_origin(s, ls.wi)
                                 t_max = ls.dist * (1.0 - 1.0e-5) - ray_epsilon(s.p)
                                 n_rays += 1
                                 if not occluded(scene.geo, origin, ls.wi, t_max):
@@ -209,7 +209,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
                 prev_pdf = bs.pdf
                 prev_specular = bs.specular
                 prev_p = s.p
-                o = offset_origin(s.p, s.ng, wi)
+                o = offset_origin(s, wi)
                 d = wi
                 depth += 1
                 u_rr = wp.randf(rng)
