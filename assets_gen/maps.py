@@ -2,9 +2,10 @@
 ridge bump (m), plus the pieces the terrain generators share (band-limited noise, greyscale
 previews, parameter dataclasses as CLI options, staged output with a manifest).
 
-Shell maps live in the shell's parameter square: u runs across the shell (around the aperture,
-or across the fan of a scallop), v runs along growth from the apex (v = 0) to the margin (v = 1),
-so growth bands and concentric ridges are lines of constant v and radial ribs lines of constant u.
+Shell maps live in the shell's parameter square, the UVs `assets-gen seashell` writes: u runs
+along growth from the apex (u = 0) to the margin (u = 1), v across the shell (around the aperture,
+or across the fan of a scallop), so growth bands and concentric ridges are lines of constant u and
+radial ribs lines of constant v.
 Lens maps cover the lens outline's bounding box, u to the right and v down, like the image.
 """
 from __future__ import annotations
@@ -237,8 +238,8 @@ def banded_phase(t: np.ndarray, count: int, irregularity: float,
 
 @dataclass(frozen=True)
 class ShellMapParams:
-    width: int = param(1024, "map pixels along u (across the shell)")
-    height: int = param(1024, "map pixels along v (apex to margin)")
+    width: int = param(1024, "map pixels along u (apex to margin)")
+    height: int = param(1024, "map pixels along v (across the shell)")
     waviness: float = param(0.01, "how far band and ridge lines wander, as a fraction of the map")
     waviness_size: float = param(0.1, "feature size of the wander, as a fraction of the map")
 
@@ -291,17 +292,18 @@ def shell_height(p: ShellHeightParams, seed: int) -> np.ndarray:
     """Height (m) of growth bands: the shell swells across each band and thins again at the growth
     check that ends it; band heights vary like the widths (a good and a poor season)."""
     rng = np.random.default_rng(seed)
-    _, v = _shell_grid(p, rng)
-    phase, idx = banded_phase(v, p.bands, p.irregularity, rng)
+    u, _ = _shell_grid(p, rng)
+    phase, idx = banded_phase(u, p.bands, p.irregularity, rng)
     amp = p.band_height_mm * 1e-3 * rng.lognormal(0.0, p.irregularity * 0.5, size=p.bands)
     return amp[idx] * np.sin(np.pi * phase) ** 2
 
 
 def shell_bump(p: ShellBumpParams, seed: int) -> np.ndarray:
-    """Height (m) of fine regular ridges: |cos|^sharpness peaks, radial (constant u) or concentric."""
+    """Height (m) of fine regular ridges: |cos|^sharpness peaks, radial (constant v) or concentric
+    (constant u)."""
     rng = np.random.default_rng(seed)
     u, v = _shell_grid(p, rng)
-    t = u if p.pattern == "radial" else v
+    t = v if p.pattern == "radial" else u
     phase, _ = banded_phase(t, p.ridges, 0.0, rng)
     return p.ridge_height_mm * 1e-3 * np.sin(np.pi * phase) ** p.sharpness
 
@@ -332,7 +334,7 @@ def register(subparsers: Any) -> None:
                 lambda p: {"width_mm": p.width_mm, "height_mm": p.height_mm}))
     add_generator_parser(
         subparsers, "shell-height",
-        "Shell height map (m) of growth bands in the shell's (u across, v apex-to-margin) square.",
+        "Shell height map (m) of growth bands in the shell's (u apex-to-margin, v across) square.",
         ShellHeightParams, _runner("shell-height", ShellHeightParams, shell_height, "m", lambda p: {}))
     add_generator_parser(
         subparsers, "shell-bump",

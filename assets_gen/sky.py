@@ -204,8 +204,9 @@ def generate(out_dir: str | Path, elevation_deg: float = 45.0, azimuth_deg: floa
                                   "ground_rgb_radiance": ground, "rgb_irradiance_horizontal": horizontal},
             "units": "pixel luminance in kcd/m^2 (linear sRGB); the sun disc is not in the map",
             "frame": "light frame +z up; in a y-up scene use Rotate -90 1 0 0",
-            "sun_distant_light": "distant light along -direction_world_y_up, L = rgb_radiance, "
-                                 f"angular radius {SUN_ANGULAR_RADIUS_DEG} deg"}
+            "sun_distant_light": "LightSource \"distant\" with \"point3 from\" = direction_world_y_up, "
+                                 "\"rgb L\" = rgb_irradiance (a distant light's L is the irradiance it "
+                                 f"delivers), \"float angularradius\" [{SUN_ANGULAR_RADIUS_DEG}]"}
     with staged_output(out_dir) as stage:
         for name, img in maps.items():
             write_exr(stage / name, img.astype(np.float32))
