@@ -3,13 +3,20 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 export WARP_CACHE_PATH ?= $(CURDIR)/.warp-cache
-SCENE ?= scenes/demo.pbrt
+SCENE ?= scenes/beach.pbrt
+# the beach renders as a CPU preview by default; the full frame is
+# `render scenes/beach.pbrt -o beach.exr --spp 4096 --device cuda`
+ifeq ($(SCENE),scenes/beach.pbrt)
+RES ?= 540x960
+SPP ?= 16
+FLAGS ?= --denoise
+endif
 OUT ?= out/$(notdir $(SCENE:.pbrt=.png))
 SPP ?=
 RES ?=
 FLAGS ?=
 
-.PHONY: render test install bench clean props beach figures
+.PHONY: render test install bench clean props demo figures
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -31,9 +38,9 @@ render: install
 props:
 	$(MAKE) render SCENE=scenes/props.pbrt OUT=out/props.png RES=800x220 SPP=64 FLAGS=--denoise
 
-# a CPU preview of the beach; the full frame is `render scenes/beach.pbrt -o beach.exr --spp 4096 --device cuda`
-beach:
-	$(MAKE) render SCENE=scenes/beach.pbrt OUT=out/beach_preview.png RES=540x960 SPP=16 FLAGS=--denoise
+# the core renderer's demo scene (glass, metals, area light, soft sun, depth of field)
+demo:
+	$(MAKE) render SCENE=scenes/demo.pbrt
 
 # the seed report's figures 2, 3 and 8 with our generated shell and maps
 figures:

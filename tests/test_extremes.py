@@ -8,7 +8,6 @@ a sky, diffuse under a distant light), so the module compiles nothing new when r
 """
 from __future__ import annotations
 
-import importlib.util
 import math
 
 import numpy as np
@@ -19,7 +18,7 @@ import renderer
 from renderer.api import RenderStats
 from renderer.scene.description import (CameraDesc, DistantLightDesc, FilmDesc, InfiniteLightDesc, InstanceSetDesc,
                                         MaterialDesc, MeshDesc, SamplerDesc, SceneDescription, ShapeDesc)
-from scenes_py import HERE, look_at, params, single_object_scene, sphere_mesh
+from scenes_py import HERE, look_at, params, single_object_scene
 
 RHO = 0.5
 
@@ -219,19 +218,12 @@ def test_conductor_extremes_bounded(roughness, eta, k):
     assert centre.mean() > 0.05
 
 
-# ---- thin film (skipped until renderer/materials/thinfilm.py exists) ---------------------------
+# ---- thin film ------------------------------------------------------------------------------------
 
-HAS_THINFILM = importlib.util.find_spec("renderer.materials.thinfilm") is not None
-
-
-@pytest.mark.skipif(not HAS_THINFILM, reason="renderer/materials/thinfilm.py does not exist yet")
 @pytest.mark.parametrize("thickness_nm", [0.0, 100_000.0])
 def test_thin_film_thickness_extremes(thickness_nm):
     """Film thickness 0 (the bare substrate) and 100 um (thousands of fringes per nm of
     wavelength, phases of ~1e3 radians through cos): finite and no brighter than the sky."""
-    from renderer.materials import REGISTRY
-
-    assert "thinfilm" in REGISTRY, "thinfilm.py exists but is not registered"
     desc = single_object_scene(MaterialDesc("thinfilm", params(thickness=thickness_nm), HERE))
     img = render(desc, spp=32)
     unused = [w for w in desc.warnings if '"thickness"' in w]
