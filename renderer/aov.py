@@ -15,7 +15,7 @@ from renderer.camera import generate_ray
 from renderer.device_scene import Features, Scene
 from renderer.geometry import intersect, surface_at
 from renderer.integrator import bump_normal, load_bsdf
-from renderer.materials import REGISTRY, kind_id
+from renderer.materials import dispatch_table
 from renderer.materials.bsdf import BSDFSample
 from renderer.sampling import frame_from_tangent, sample_rng, to_local
 
@@ -26,8 +26,7 @@ AOV_CHANNELS = {"albedo": ("R", "G", "B"), "normal": ("X", "Y", "Z"), "depth": (
 
 @lru_cache(maxsize=None)
 def aov_kernel(features: Features) -> wp.Kernel:
-    mods = [REGISTRY[name] for name in features.materials]
-    kinds = [kind_id(name) for name in features.materials]
+    mods, kinds = dispatch_table(features.materials)
     n_mat = len(mods)
     has_bump = features.bump
 

@@ -15,7 +15,7 @@ from renderer.camera import generate_ray
 from renderer.device_scene import Features, Scene
 from renderer.geometry import intersect, occluded, offset_origin, ray_epsilon, surface_at
 from renderer.lights import DISTANT, area_emitted, area_pdf, distant_cone_radiance, env_pdf, env_radiance, sample_light
-from renderer.materials import REGISTRY, kind_id
+from renderer.materials import dispatch_table
 from renderer.materials.bsdf import BSDF, MAX_SLOTS, BSDFSample, Slots
 from renderer.sampling import frame_from_tangent, max3, power_heuristic, sample_rng, to_local, to_world
 from renderer.subsurface import subsurface_scatter
@@ -70,8 +70,7 @@ def bump_normal(scene: Scene, tid: int, uv: wp.vec2, ns: wp.vec3, dpdu: wp.vec3,
 
 @lru_cache(maxsize=None)
 def integrator_kernel(features: Features) -> wp.Kernel:
-    mods = [REGISTRY[name] for name in features.materials]
-    kinds = [kind_id(name) for name in features.materials]
+    mods, kinds = dispatch_table(features.materials)
     n_mat = len(mods)
     has_bump = features.bump
     has_env = features.env

@@ -28,6 +28,11 @@ def kind_id(name: str) -> int:
     return list(REGISTRY).index(name)
 
 
+def dispatch_table(names: tuple[str, ...]) -> tuple[list[ModuleType], list[int]]:
+    """The modules and kind ids that a kernel specialised to the materials ``names`` switches over."""
+    return [REGISTRY[n] for n in names], [kind_id(n) for n in names]
+
+
 @wp.struct
 class Materials:
     kind: wp.array(dtype=int)

@@ -52,3 +52,21 @@ def same_hemisphere(a: wp.vec3, b: wp.vec3) -> bool:
 def reflect_z(w: wp.vec3) -> wp.vec3:
     """Mirror reflection about the local normal."""
     return wp.vec3(-w[0], -w[1], w[2])
+
+
+@wp.func
+def refract(wi: wp.vec3, n: wp.vec3, eta: float) -> wp.vec4:
+    """Refracted direction of wi (pointing away from the surface) through normal n; w = eta' or 0 under TIR."""
+    cos_i = wp.dot(n, wi)
+    e = eta
+    nn = n
+    if cos_i < 0.0:
+        e = 1.0 / e
+        cos_i = -cos_i
+        nn = -n
+    sin2_t = wp.max(0.0, 1.0 - cos_i * cos_i) / (e * e)
+    if sin2_t >= 1.0:
+        return wp.vec4(0.0)
+    cos_t = wp.sqrt(1.0 - sin2_t)
+    wt = -wi / e + nn * (cos_i / e - cos_t)
+    return wp.vec4(wt[0], wt[1], wt[2], e)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import warp as wp
 
-from renderer.materials.bsdf import BSDF, BSDFSample, failed_sample, reflect_z
+from renderer.materials.bsdf import BSDF, BSDFSample, failed_sample, reflect_z, refract
 from renderer.optics import fresnel_dielectric
 from renderer.materials.microfacet import (ggx_D, ggx_G, ggx_sample_visible, ggx_visible_pdf, is_smooth,
                                            roughness_to_alpha)
@@ -88,24 +88,6 @@ def pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> float:
 
 
 @wp.func
-def _refract(wi: wp.vec3, n: wp.vec3, eta: float) -> wp.vec4:
-    """Refracted direction of wi (pointing away from the surface) through normal n; w = eta' or 0 under TIR."""
-    cos_i = wp.dot(n, wi)
-    e = eta
-    nn = n
-    if cos_i < 0.0:
-        e = 1.0 / e
-        cos_i = -cos_i
-        nn = -n
-    sin2_t = wp.max(0.0, 1.0 - cos_i * cos_i) / (e * e)
-    if sin2_t >= 1.0:
-        return wp.vec4(0.0)
-    cos_t = wp.sqrt(1.0 - sin2_t)
-    wt = -wi / e + nn * (cos_i / e - cos_t)
-    return wp.vec4(wt[0], wt[1], wt[2], e)
-
-
-@wp.func
 def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
     eta = b.p[0][0]
     alpha = _alpha(b)
@@ -117,7 +99,7 @@ def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
             s.weight = wp.vec3(1.0)
             s.pdf = R
         else:
-            t = _refract(wo, wp.vec3(0.0, 0.0, 1.0), eta)
+            t = refract(wo, wp.vec3(0.0, 0.0, 1.0), eta)
             if t[3] == 0.0:
                 return failed_sample()
             s.wi = wp.vec3(t[0], t[1], t[2])
@@ -134,7 +116,7 @@ def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
         if wi[2] * wo[2] <= 0.0:
             return failed_sample()
     else:
-        t = _refract(wo, wm, eta)
+        t = refract(wo, wm, eta)
         if t[3] == 0.0:
             return failed_sample()
         wi = wp.vec3(t[0], t[1], t[2])

@@ -25,8 +25,7 @@ from typing import TYPE_CHECKING
 import warp as wp
 
 from renderer.errors import SceneError
-from renderer.materials.bsdf import BSDF, BSDFSample, failed_sample, reflect_z, same_hemisphere
-from renderer.materials.dielectric import _refract
+from renderer.materials.bsdf import BSDF, BSDFSample, failed_sample, reflect_z, refract, same_hemisphere
 from renderer.optics import thin_film_rgb3, thin_film_rgb_sampled
 from renderer.sampling import INV_PI, cosine_hemisphere, max3
 
@@ -159,7 +158,7 @@ def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
         s.specular = True
         return s
     if u[2] < p_r + p_t:
-        refr = _refract(wo, wp.vec3(0.0, 0.0, 1.0), b.p[ETA_INNER][0] / b.p[ETA_OUTER][0])
+        refr = refract(wo, wp.vec3(0.0, 0.0, 1.0), b.p[ETA_INNER][0] / b.p[ETA_OUTER][0])
         if refr[3] == 0.0:
             return failed_sample()
         s.wi = wp.vec3(refr[0], refr[1], refr[2])
