@@ -51,7 +51,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops (default: 0)")
     p.add_argument("--threads", type=int, help="CPU worker threads (default: all cores)")
     p.add_argument("--no-nee", action="store_true", help="BSDF sampling only (no light sampling): for checks")
-    p.add_argument("--rr-depth", type=int, help="Russian roulette from this path depth on (default 2; -1: off)")
+    p.add_argument("--rr-depth", type=int, help="Russian roulette from this path depth on (default 4; -1: off)")
     p.add_argument("--thin-film", metavar="MODE", help="thinfilm colour: rgb3 (the seed's 3 wavelengths) or "
                    "spectral:N (N jittered wavelengths; default spectral:32)")
     g = p.add_argument_group("long renders")
