@@ -59,3 +59,72 @@ def bsdf_moments(name: str, slots: list, wo, n: int = 400_000, seed: int = 1) ->
     return {"pdf_integral": o[:, 0, 0].mean(), "albedo_uniform": o[:, 1].mean(axis=0),
             "albedo_sampled": o[:, 2].mean(axis=0), "max_inconsistency": o[:, 3, 0].max(),
             "albedo_uniform_stderr": o[:, 1].std(axis=0) / np.sqrt(n)}
+
+
+@lru_cache(maxsize=None)
+def _chi2_kernels(name: str):
+    mod = REGISTRY[name]
+
+    @wp.kernel(module="unique")
+    def draw(p: Slots, kind: int, wo: wp.vec3, seed: int, out: wp.array(dtype=wp.vec4)):
+        i = wp.tid()
+        rng = wp.rand_init(seed, i)
+        b = BSDF()
+        b.kind = kind
+        b.p = p
+        s = wp.static(mod.sample)(b, wo, wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)))
+        ok = 0.0
+        if s.pdf > 0.0 and not s.specular:
+            ok = 1.0
+        out[i] = wp.vec4(s.wi[0], s.wi[1], s.wi[2], ok)
+
+    @wp.kernel(module="unique")
+    def density(p: Slots, kind: int, wo: wp.vec3, dirs: wp.array(dtype=wp.vec3), out: wp.array(dtype=float)):
+        i = wp.tid()
+        b = BSDF()
+        b.kind = kind
+        b.p = p
+        out[i] = wp.static(mod.pdf)(b, wo, dirs[i])
+
+    return draw, density
+
+
+def chi2_pvalue(name: str, slots: list, wo, n: int = 200_000, z_bins: int = 12, phi_bins: int = 24,
+                sub: int = 16, seed: int = 3) -> float:
+    """Pearson chi-square p-value that ``sample``'s directions follow ``pdf``: counts in
+    equal-solid-angle (cos θ, φ) cells against the pdf integrated over each cell on a stratified
+    sub x sub grid. Cells expecting fewer than 5 samples are pooled into one."""
+    from scipy.stats import chi2
+
+    p = np.zeros((MAX_SLOTS, 3), dtype=np.float32)
+    for i, v in enumerate(slots):
+        p[i] = v
+    wo = np.asarray(wo, dtype=np.float64)
+    wo = wo / np.linalg.norm(wo)
+    draw, density = _chi2_kernels(name)
+    slots_wp, wo_wp = Slots(*p.ravel().tolist()), wp.vec3(*wo)
+    out = wp.zeros(n, dtype=wp.vec4, device="cpu")
+    wp.launch(draw, dim=n, inputs=[slots_wp, kind_id(name), wo_wp, seed, out], device="cpu")
+    s = out.numpy()
+    s = s[s[:, 3] > 0]
+    zi = np.clip(((s[:, 2] + 1) / 2 * z_bins).astype(int), 0, z_bins - 1)
+    fi = np.clip(((np.arctan2(s[:, 1], s[:, 0]) % (2 * np.pi)) / (2 * np.pi) * phi_bins).astype(int), 0, phi_bins - 1)
+    observed = np.bincount(zi * phi_bins + fi, minlength=z_bins * phi_bins).astype(np.float64)
+    # cell integrals of the pdf: z and φ are uniform in solid angle, so a midpoint grid is fair
+    zz = -1 + (np.arange(z_bins * sub) + 0.5) * 2 / (z_bins * sub)
+    ff = (np.arange(phi_bins * sub) + 0.5) * 2 * np.pi / (phi_bins * sub)
+    Z, F = np.meshgrid(zz, ff, indexing="ij")
+    r = np.sqrt(np.maximum(0, 1 - Z ** 2))
+    dirs = np.stack([r * np.cos(F), r * np.sin(F), Z], -1).reshape(-1, 3).astype(np.float32)
+    pdf = wp.zeros(len(dirs), dtype=float, device="cpu")
+    wp.launch(density, dim=len(dirs), inputs=[slots_wp, kind_id(name), wo_wp,
+                                              wp.array(dirs, dtype=wp.vec3, device="cpu"), pdf], device="cpu")
+    cell_area = 4 * np.pi / (z_bins * phi_bins * sub * sub)
+    integral = (pdf.numpy().reshape(z_bins, sub, phi_bins, sub) * cell_area).sum(axis=(1, 3)).ravel()
+    expected = integral / integral.sum() * observed.sum()
+    big = expected >= 5
+    obs = np.append(observed[big], observed[~big].sum())
+    exp = np.append(expected[big], expected[~big].sum())
+    keep = exp > 0
+    stat = ((obs[keep] - exp[keep]) ** 2 / exp[keep]).sum()
+    return float(chi2.sf(stat, keep.sum() - 1))

@@ -187,3 +187,17 @@ def test_subsurface_sphere_furnace_is_bounded():
     sss = _object_mean(_disney_scene(color=1.0, roughness=0.5, scatterdistance=(0.3, 0.2, 0.1)), spp=128)
     assert np.all(sss <= surface + 0.02), (sss, surface)
     assert sss.min() > 0.85
+
+
+@pytest.mark.parametrize("case", ["diffuse+retro", "specular-metal-aniso", "clearcoat+sheen", "glass",
+                                  "thin-flat-difftrans", "thin-glass"])
+def test_sampled_directions_chi_square(case):
+    """Histogram of sampled directions against the pdf integrated per cell (Pearson chi-square)."""
+    from bsdf_harness import chi2_pvalue
+
+    if LOBES[case].get("thin") or LOBES[case].get("spectrans"):
+        wos = [ANGLES["oblique"], ANGLES["below"]]
+    else:
+        wos = [ANGLES["oblique"]]
+    for wo in wos:
+        assert chi2_pvalue("disney", rows(**LOBES[case]), wo) > 1e-4, wo

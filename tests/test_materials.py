@@ -39,3 +39,20 @@ def test_diffuse_pdf_integrates_to_one():
     m = bsdf_moments("diffuse", [(1, 1, 1)], (0.2, 0.1, 0.7))
     assert abs(m["pdf_integral"] - 1.0) < 0.01
     np.testing.assert_allclose(m["albedo_sampled"], 1.0, atol=1e-6)
+
+
+CHI2_CASES = [
+    ("diffuse", [(0.8, 0.5, 0.2)]),
+    ("conductor", [(1, 1, 1), (100, 100, 100), (0.5,) * 3, (0.5,) * 3, (1, 1, 1), (0, 0, 0), (0, 0, 0)]),
+    ("conductor", [(1, 1, 1), (100, 100, 100), (0.2,) * 3, (0.6,) * 3, (1, 1, 1), (0, 0, 0), (0, 0, 0)]),
+    ("dielectric", [(1.5,) * 3, (0.4,) * 3, (0.4,) * 3, (1, 1, 1)]),
+]
+
+
+@pytest.mark.parametrize("name,slots", CHI2_CASES, ids=[f"{c[0]}{i}" for i, c in enumerate(CHI2_CASES)])
+@pytest.mark.parametrize("wo", [(0.3, 0.2, 0.9), (0.8, -0.1, 0.3), (0.4, 0.3, -0.7)], ids=["oblique", "low", "below"])
+def test_sampled_directions_follow_the_pdf_chi_square(name, slots, wo):
+    """Histogram of sampled directions against the pdf integrated over each cell (Pearson chi-square)."""
+    from bsdf_harness import chi2_pvalue
+
+    assert chi2_pvalue(name, slots, wo) > 1e-4
