@@ -28,7 +28,6 @@ names; so editing the recipe, a generator, or an upstream asset rebuilds exactly
 on it. Generators are pure functions of (parameters, seed), so a rebuild gives the same bytes.
 
     assets-gen recipe scenes/beach.recipe.json [--force] [--quick] [--only NAME ...]
-    python -m assets_gen.recipe scenes/beach.recipe.json
 """
 from __future__ import annotations
 
@@ -420,7 +419,7 @@ def recipe_for(scene: str | Path) -> Path | None:
 
 
 # --------------------------------------------------------------------------------------------
-# CLI: `assets-gen recipe FILE` and `python -m assets_gen.recipe FILE`
+# CLI: `assets-gen recipe FILE` (also `python -m assets_gen recipe FILE`)
 # --------------------------------------------------------------------------------------------
 
 def _add_arguments(p: argparse.ArgumentParser) -> None:
@@ -452,21 +451,3 @@ def register(subparsers: Any) -> None:
                               formatter_class=argparse.RawDescriptionHelpFormatter)
     _add_arguments(p)
     p.set_defaults(run=_run)
-
-
-def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m assets_gen.recipe", description=__doc__,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
-    _add_arguments(p)
-    args = p.parse_args(argv)
-    try:
-        for path in _run(args):
-            print(path)
-    except GeneratorError as e:
-        print(f"assets-gen recipe: error: {e}", file=sys.stderr)
-        return 2
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

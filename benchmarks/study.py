@@ -46,17 +46,21 @@ def session(scene, res, **kw) -> RenderSession:
     return RenderSession(scene, settings_for(scene, width=res[0], height=res[1], **kw))
 
 
+def measure(s: RenderSession, ref: np.ndarray, knob: str, value) -> dict:
+    """One table row: the session's samples and time, and its errors against the reference."""
+    img = s.image()
+    return {"knob": knob, "value": value, "spp": s.film.spp, "seconds": s.stats.seconds,
+            "samples_per_s": s.stats.samples_per_second, "relmse": relative_mse(img, ref, trim=1e-3),
+            "relmse_untrimmed": relative_mse(img, ref), "flip": flip_error(img, ref)}
+
+
 def spp_sweep(scene, res, ref, max_spp: int, seed: int) -> list[dict]:
     """One progressive render read out at 1, 2, 4, ... spp: error vs time along one run."""
     s = session(scene, res, seed=seed)
     rows, spp = [], 1
     while spp <= max_spp:
         s.run(spp)
-        img = s.image()
-        rows.append({"knob": "spp", "value": spp, "spp": spp, "seconds": s.stats.seconds,
-                     "samples_per_s": s.stats.samples_per_second, "relmse": relative_mse(img, ref, trim=1e-3),
-                     "relmse_untrimmed": relative_mse(img, ref),
-                     "flip": flip_error(img, ref)})
+        rows.append(measure(s, ref, "spp", spp))
         spp *= 2
     return rows
 
@@ -66,11 +70,7 @@ def fixed_spp_runs(scene, res, ref, spp: int, knob: str, values: list, seed: int
     for v in values:
         s = session(scene, res, seed=seed, **{**fixed, knob: v})
         s.run(spp)
-        img = s.image()
-        rows.append({"knob": knob, "value": v, "spp": spp, "seconds": s.stats.seconds,
-                     "samples_per_s": s.stats.samples_per_second, "relmse": relative_mse(img, ref, trim=1e-3),
-                     "relmse_untrimmed": relative_mse(img, ref),
-                     "flip": flip_error(img, ref)})
+        rows.append(measure(s, ref, knob, v))
     return rows
 
 

@@ -13,7 +13,6 @@ import time
 import traceback
 from pathlib import Path
 
-import numpy as np
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_BAD_SAMPLES = 0, 2, 3
 
@@ -125,11 +124,6 @@ class _StopSignals:
             signal.signal(s, h)
 
 
-def relative_mse(img: np.ndarray, ref: np.ndarray) -> float:
-    """relMSE = mean((x - r)^2 / (r^2 + 0.01)), the usual convergence metric."""
-    return float(np.mean((img - ref) ** 2 / (ref ** 2 + 1e-2)))
-
-
 def write_outputs(path: Path, img, layers: dict, exposure: float, header: dict) -> None:
     from renderer.aov import AOV_CHANNELS
     from renderer.imageio import write_exr, write_png
@@ -150,6 +144,7 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         from renderer.api import load_scene, settings_for
+        from renderer.metrics import relative_mse
         from renderer.session import RenderSession, load_checkpoint, save_checkpoint
 
         scene = load_scene(args.scene)
