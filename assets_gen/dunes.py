@@ -202,7 +202,7 @@ def write_heightfield(stage: Path, name: str, field: Heightfield, preview: bool)
     in metres with the grid extent in its header, what ``ripples`` reads) and a hillshade PNG."""
     import trimesh
 
-    from renderer.imageio import write_exr
+    from renderer.io.images import write_exr
 
     verts = grid_vertices(field)
     faces = grid_faces(*field.y.shape)
@@ -222,7 +222,7 @@ def write_heightfield(stage: Path, name: str, field: Heightfield, preview: bool)
 
 def read_heightfield(path: str | Path) -> Heightfield:
     """A heightfield written by :func:`write_heightfield`."""
-    from renderer.imageio import read_exr
+    from renderer.io.images import read_exr
 
     require(Path(path).is_file(), f"heightfield {str(path)!r} not found")
     chans, header = read_exr(path)

@@ -98,7 +98,7 @@ def random_rotations(rng: np.random.Generator, n: int) -> np.ndarray:
 
 def ground_height(vertices: np.ndarray, faces: np.ndarray, xz: np.ndarray) -> np.ndarray:
     """Surface height below each (x, z), by casting rays straight down."""
-    from renderer.raycast import cast_rays
+    from renderer.geometry.raycast import cast_rays
 
     top = float(vertices[:, 1].max()) + 1.0
     origins = np.column_stack([xz[:, 0], np.full(len(xz), top), xz[:, 1]])
@@ -152,7 +152,7 @@ def scatter_grains(vertices: np.ndarray, faces: np.ndarray, cam: PinholeCamera, 
     placed) until all are placed."""
     from scipy.spatial import cKDTree
 
-    from renderer.raycast import cast_rays
+    from renderer.geometry.raycast import cast_rays
 
     n = p.count
     diameters = 1e-3 * p.median_diameter_mm * np.exp(p.sigma_ln * rng.standard_normal(n))

@@ -127,7 +127,7 @@ def emit(out_dir: Path, generator: str, params: Any, seed: int,
 def write_map(stage: Path, name: str, values: np.ndarray, units: str, preview: bool,
               header: dict[str, object] | None = None) -> list[str]:
     """``name.exr`` (one float channel ``Y`` in ``units``) and optionally ``name.png``."""
-    from renderer.imageio import write_exr
+    from renderer.io.images import write_exr
 
     write_exr(stage / f"{name}.exr", {"Y": np.asarray(values, dtype=np.float32)},
               {"units": units, **(header or {})})

@@ -181,7 +181,7 @@ def generate(out_dir: str | Path, elevation_deg: float = 45.0, azimuth_deg: floa
     require(8 <= resolution <= 8192, f"resolution must be 8..8192, got {resolution}")
     require(layout in ("both", "latlong", "equal-area"), f"layout must be both, latlong or equal-area, got {layout!r}")
     require(0.0 <= ground_albedo <= 1.0, f"ground albedo must be 0..1, got {ground_albedo}")
-    from renderer.imageio import write_exr
+    from renderer.io.images import write_exr
 
     sun = sun_direction(elevation_deg, azimuth_deg)
     light = sun_light(sun, turbidity)

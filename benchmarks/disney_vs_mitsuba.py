@@ -109,7 +109,7 @@ def main() -> None:
               f"{d:9.3f}{'  (no subsurface in Mitsuba)' if sss else ''}")
     print(f"median relative difference over the comparable spheres: {np.median(rel):.3f}")
     if args.png:
-        from renderer.imageio import write_png
+        from renderer.io.images import write_png
 
         write_png(args.png, np.concatenate([ours, theirs], axis=1))
 

@@ -27,7 +27,7 @@ os.environ.setdefault("WARP_CACHE_PATH", str(ROOT / ".warp-cache"))
 
 import renderer  # noqa: E402
 from renderer.api import settings_for  # noqa: E402
-from renderer.metrics import relative_mse  # noqa: E402
+from renderer.io.metrics import relative_mse  # noqa: E402
 from renderer.session import RenderSession  # noqa: E402
 
 

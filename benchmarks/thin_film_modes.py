@@ -18,7 +18,9 @@ import colour
 import numpy as np
 import warp as wp
 
-from renderer import optics, spectral
+from renderer.optics import arrays as optics
+from renderer.color.rgb_weights import make_rgb_weight_table
+from renderer.color import spectral
 
 FILMS = {"soap 1.00|1.33|1.00": (1.0, 1.33, 1.0), "coat 1.00|1.55|1.66": (1.0, 1.55, 1.66)}
 COS_THETA = np.array([1.0, 0.8, 0.5, 0.2])
@@ -57,7 +59,7 @@ def cost_ns(mode: str) -> float:
     if mode == "rgb3":
         kernel, args = optics._rgb3_kernel, [*inputs, out]
     elif mode.startswith("jittered:"):
-        table = optics.make_rgb_weight_table("cpu")
+        table = make_rgb_weight_table("cpu")
         kernel, args = optics._rgb_sampled_kernel, [*inputs, u, int(mode.split(":")[1]), table, out,
                                                     wp.empty(m, dtype=wp.vec3, device="cpu")]
     else:

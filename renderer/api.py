@@ -1,16 +1,17 @@
 """The Python API: ``load_scene`` (parse and build, no device work) and ``render``."""
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
 from renderer.scene.description import SceneDescription
-from renderer.session import RenderSession, RenderSettings, RenderStats
+from renderer.device.runtime import init_warp
+from renderer.session import RenderSession, RenderStats
+from renderer.settings import RenderSettings, settings_for
 
-__all__ = ["load_scene", "render", "init_warp", "RenderStats", "RenderSettings", "RenderSession"]
+__all__ = ["load_scene", "render", "init_warp", "settings_for", "RenderStats", "RenderSettings", "RenderSession"]
 
 
 def load_scene(path: str | Path) -> SceneDescription:
@@ -18,17 +19,6 @@ def load_scene(path: str | Path) -> SceneDescription:
     from renderer.scene import load_description
 
     return load_description(path)
-
-
-def init_warp(quiet: bool = True) -> None:
-    """Initialise Warp once, with kernels cached under $WARP_CACHE_PATH when it is set."""
-    import warp as wp
-
-    cache = os.environ.get("WARP_CACHE_PATH")
-    if cache:
-        wp.config.kernel_cache_dir = cache
-    wp.config.quiet = quiet
-    wp.init()
 
 
 def render(scene: SceneDescription, spp: int | None = None, device: str = "cpu", seed: int | None = None,
@@ -48,18 +38,3 @@ def render(scene: SceneDescription, spp: int | None = None, device: str = "cpu",
     if stats is not None:
         stats.__dict__.update(result.__dict__)
     return session.image()
-
-
-def settings_for(scene: SceneDescription, seed: int | None = None, width: int | None = None,
-                 height: int | None = None, max_depth: int | None = None, nee: bool = True,
-                 rr_depth: int | None = None, thin_film: str | None = None) -> RenderSettings:
-    """Render settings: explicit values, else the scene file's (and the integrator's defaults)."""
-    from renderer.integrator import RR_DEPTH
-    from renderer.materials.thinfilm import DEFAULT_MODE, spectral_samples
-
-    thin_film = thin_film or DEFAULT_MODE
-    spectral_samples(thin_film)  # refuse an unknown mode before any device work
-    return RenderSettings(width=width or scene.film.width, height=height or scene.film.height,
-                          seed=scene.sampler.seed if seed is None else int(seed),
-                          max_depth=scene.integrator.max_depth if max_depth is None else int(max_depth), nee=nee,
-                          rr_depth=RR_DEPTH if rr_depth is None else int(rr_depth), thin_film=thin_film)

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import warp as wp
 
-from renderer.sampling import concentric_disk
+from renderer.sampling.warps import concentric_disk
 from renderer.scene.description import CameraDesc
 
 

@@ -28,7 +28,7 @@ def _resolution(text: str) -> tuple[int, int]:
 
 
 def _aov_list(text: str) -> tuple[str, ...]:
-    from renderer.aov import AOV_NAMES
+    from renderer.integrators.aov import AOV_NAMES
 
     names = tuple(n.strip() for n in text.split(",") if n.strip())
     bad = [n for n in names if n not in AOV_NAMES]
@@ -125,8 +125,8 @@ class _StopSignals:
 
 
 def write_outputs(path: Path, img, layers: dict, exposure: float, header: dict) -> None:
-    from renderer.aov import AOV_CHANNELS
-    from renderer.imageio import write_exr, write_png
+    from renderer.integrators.aov import AOV_CHANNELS
+    from renderer.io.images import write_exr, write_png
 
     if path.suffix.lower() == ".exr":
         chans = {c: img[..., i] for i, c in enumerate("RGB")}
@@ -144,7 +144,7 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         from renderer.api import load_scene, settings_for
-        from renderer.metrics import relative_mse
+        from renderer.io.metrics import relative_mse
         from renderer.session import RenderSession, load_checkpoint, save_checkpoint
 
         scene = load_scene(args.scene)
@@ -160,7 +160,7 @@ def main(argv: list[str] | None = None) -> int:
                                 rr_depth=args.rr_depth, thin_film=args.thin_film)
         ref = None
         if args.reference:
-            from renderer.imageio import read_image
+            from renderer.io.images import read_image
 
             ref = read_image(args.reference)[..., :3]
             if ref.shape[:2] != (settings.height, settings.width):
@@ -203,12 +203,12 @@ def main(argv: list[str] | None = None) -> int:
             img = session.image()
             layers: dict = {}
             if args.aov or args.denoise:
-                from renderer.aov import render_aovs
+                from renderer.integrators.aov import render_aovs
 
                 aovs = render_aovs(session)
                 layers = {k: aovs[k] for k in args.aov}
                 if args.denoise:
-                    from renderer.denoise import denoise
+                    from renderer.io.denoise import denoise
 
                     layers["noisy"] = img
                     img = denoise(img, aovs["albedo"], aovs["normal"])

@@ -17,22 +17,8 @@ from typing import Callable
 import numpy as np
 
 from renderer.errors import RenderError
-from renderer.integrator import RR_DEPTH
-from renderer.materials.thinfilm import DEFAULT_MODE as THIN_FILM_DEFAULT
 from renderer.scene.description import SceneDescription
-
-@dataclass(frozen=True)
-class RenderSettings:
-    """Everything besides the scene that changes the image; a checkpoint must match it."""
-
-    width: int
-    height: int
-    seed: int
-    max_depth: int
-    nee: bool = True
-    rr_depth: int = RR_DEPTH            # Russian roulette from this depth on; negative: never
-    thin_film: str = THIN_FILM_DEFAULT  # thin-film colour mode: rgb3 or spectral:N
-
+from renderer.settings import RenderSettings
 
 @dataclass
 class RenderStats:
@@ -79,16 +65,12 @@ class RenderSession:
                  threads: int | None = None):
         import warp as wp
 
-        from renderer.api import init_warp
-        from renderer.device_scene import upload
-        from renderer.film import Film
-        from renderer.integrator import integrator_kernel
+        from renderer.device.runtime import require_device
+        from renderer.device.scene import upload
+        from renderer.device.film import Film
+        from renderer.integrators.path import integrator_kernel
 
-        init_warp()
-        if device.startswith("cuda") and not wp.is_cuda_available():
-            raise RenderError(f'device "{device}" requested but no CUDA GPU is available (use --device cpu)')
-        if settings.max_depth < 0:
-            raise RenderError(f"max depth must be >= 0, got {settings.max_depth}")
+        require_device(device)
         self.scene = scene
         self.settings = settings
         self.device = device
@@ -108,7 +90,7 @@ class RenderSession:
     @property
     def fingerprint(self) -> str:
         if self._fingerprint is None:
-            from renderer.fingerprint import scene_fingerprint
+            from renderer.io.fingerprint import scene_fingerprint
 
             self._fingerprint = scene_fingerprint(self.scene)
         return self._fingerprint
@@ -193,7 +175,7 @@ class RenderSession:
 
 def save_checkpoint(path: str | Path, session: RenderSession) -> None:
     """Write the session's state atomically (a crash mid-write keeps the previous checkpoint)."""
-    from renderer.imageio import atomic_path
+    from renderer.io.images import atomic_path
 
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as f:

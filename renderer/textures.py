@@ -99,7 +99,7 @@ class TextureTable:
         return self._add(CONSTANT, value)
 
     def _load_image(self, path: Path, encoding: str, loc) -> tuple[int, int, int]:
-        from renderer.imageio import read_image
+        from renderer.io.images import read_image
 
         key = (path, encoding)
         if key not in self._image_cache:

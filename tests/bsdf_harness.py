@@ -9,7 +9,7 @@ import warp as wp
 
 from renderer.materials import REGISTRY, kind_id
 from renderer.materials.bsdf import BSDF, MAX_SLOTS, Slots
-from renderer.sampling import uniform_sphere
+from renderer.sampling.warps import uniform_sphere
 
 
 @lru_cache(maxsize=None)

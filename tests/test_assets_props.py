@@ -11,7 +11,7 @@ from plyfile import PlyData
 
 from assets_gen import palm, seashell, sky, sunglasses, umbrella
 from assets_gen.cli import main
-from renderer.imageio import read_exr
+from renderer.io.images import read_exr
 
 SMALL = {
     "seashell": dict(per_turn=16, around=16),

@@ -14,7 +14,7 @@ from scipy.spatial import cKDTree
 from assets_gen.cli import main
 from assets_gen.camera import PinholeCamera
 from assets_gen.grains import GrainParams, scene_camera
-from renderer.imageio import read_exr
+from renderer.io.images import read_exr
 
 DUNES = ["--size-x", "8", "--size-z", "6", "--spacing", "0.05", "--dune-height", "0.6",
          "--dune-wavelength", "4", "--crest-wander", "0.6", "--wander-size", "3"]
@@ -97,7 +97,7 @@ def test_coarse_dunes_get_a_ripple_map(tmp_path, dunes):
 
 
 def test_grains_in_frustum_visible_apart_and_lognormal(dunes, grains):
-    from renderer.raycast import cast_rays
+    from renderer.geometry.raycast import cast_rays
 
     surface = trimesh.load(dunes / "dunes.ply", process=False)
     cam = scene_camera(GrainParams(surface=str(dunes / "dunes.ply")), surface.vertices, surface.faces)

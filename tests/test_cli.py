@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from renderer.cli import EXIT_BAD_INPUT, EXIT_OK, main
-from renderer.imageio import read_exr, read_image
+from renderer.io.images import read_exr, read_image
 
 TINY = """LookAt 0 0 -4  0 0 0  0 1 0
 Camera "perspective" "float fov" [40]

@@ -13,7 +13,7 @@ from renderer.api import init_warp
 from renderer.materials import disney
 from renderer.materials.bsdf import BSDF, MAX_SLOTS, Slots
 from renderer.scene.description import MaterialDesc
-from renderer.subsurface import diffusion_profile, profile_scale, sample_profile_radius
+from renderer.integrators.subsurface import diffusion_profile, profile_scale, sample_profile_radius
 from scenes_py import HERE, params, single_object_scene, sphere_mesh
 
 init_warp()

@@ -353,7 +353,7 @@ def _env_image(h: int, f, sun: tuple[int, int, float] | None = None, tmp=None):
     import tempfile
     from pathlib import Path
 
-    from renderer.imageio import write_exr
+    from renderer.io.images import write_exr
 
     th = (np.arange(h) + 0.5) / h * np.pi
     ph = (np.arange(2 * h) + 0.5) / (2 * h) * 2 * np.pi

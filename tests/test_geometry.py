@@ -6,7 +6,7 @@ import numpy as np
 import trimesh
 
 import renderer
-from renderer.raycast import cast_rays_instanced
+from renderer.geometry.raycast import cast_rays_instanced
 from renderer.scene.description import MaterialDesc
 from scenes_py import HERE, params, single_object_scene
 

@@ -8,9 +8,9 @@ import warp as wp
 
 import renderer
 from renderer.api import init_warp
-from renderer.imageio import write_exr
+from renderer.io.images import write_exr
 from renderer.lights import LightTable, Lights, env_pdf, env_radiance, sample_light
-from renderer.sampling import uniform_sphere
+from renderer.sampling.warps import uniform_sphere
 from renderer.scene.description import InfiniteLightDesc, MaterialDesc
 from scenes_py import HERE, params, single_object_scene
 

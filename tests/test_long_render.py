@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from renderer.cli import main
-from renderer.imageio import read_exr
+from renderer.io.images import read_exr
 from renderer.session import RenderSession, load_checkpoint, save_checkpoint
 from test_cli import write_scene
 

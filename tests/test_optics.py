@@ -10,7 +10,9 @@ import numpy as np
 import pytest
 import warp as wp
 
-from renderer import optics, spectral
+from renderer import optics
+from renderer.optics import fresnel
+from renderer.color import spectral
 
 F32_ATOL = 2e-4   # float32 Airy sum vs complex128 matrices, away from degenerate points
 
@@ -75,14 +77,14 @@ def textbook_fresnel(cos_i: np.ndarray, eta: np.ndarray) -> np.ndarray:
 @wp.kernel
 def _fresnel_dielectric_kernel(cos_i: wp.array(dtype=float), eta: wp.array(dtype=float), out: wp.array(dtype=float)):
     i = wp.tid()
-    out[i] = optics.fresnel_dielectric(cos_i[i], eta[i])
+    out[i] = fresnel.fresnel_dielectric(cos_i[i], eta[i])
 
 
 @wp.kernel
 def _fresnel_conductor_kernel(cos_i: wp.array(dtype=float), eta: wp.array(dtype=wp.vec3), k: wp.array(dtype=wp.vec3),
                               out: wp.array(dtype=wp.vec3)):
     i = wp.tid()
-    out[i] = optics.fresnel_conductor(cos_i[i], eta[i], k[i])
+    out[i] = fresnel.fresnel_conductor(cos_i[i], eta[i], k[i])
 
 
 def _launch(kernel, *arrays, out_dtype=float):

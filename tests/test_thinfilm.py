@@ -11,18 +11,21 @@ import warp as wp
 import renderer
 from bsdf_harness import bsdf_moments
 from renderer import optics
+from renderer.color import spectral
+from renderer.color.rgb_weights import make_rgb_weight_table
 from renderer.api import init_warp
+from renderer.settings import thin_film_samples
 from renderer.cli import main as cli_main
 from renderer.errors import SceneError
 from renderer.materials import dielectric, thinfilm
 from renderer.materials.bsdf import BSDF, MAX_SLOTS, Slots
-from renderer.optics import RgbWeightTable
+from renderer.color.rgb_weights import RgbWeightTable
 from renderer.scene.description import MaterialDesc, MeshDesc, SceneDescription, TextureDesc
 from scenes_py import HERE, params, single_object_scene
 
 init_warp()
 
-RGB3 = np.array(optics.spectral.RGB3_WAVELENGTHS_NM)
+RGB3 = np.array(spectral.RGB3_WAVELENGTHS_NM)
 MINI_SCENE = Path(__file__).parent / "data" / "scenes" / "mini.pbrt"
 
 
@@ -76,8 +79,8 @@ def _probe(p: wp.array(dtype=Slots), wo: wp.array(dtype=wp.vec3), u: wp.array(dt
 def probe(rows: np.ndarray, wo: np.ndarray, u: np.ndarray, mode: str = "rgb3") -> dict[str, np.ndarray]:
     """Run :func:`_probe` over cases: rows (n, MAX_SLOTS, 3), wo and u (n, 3)."""
     n = len(rows)
-    n_lambda = thinfilm.spectral_samples(mode)
-    table = optics.make_rgb_weight_table("cpu")
+    n_lambda = thin_film_samples(mode)
+    table = make_rgb_weight_table("cpu")
     arrays = [wp.zeros((n, k), dtype=wp.vec3, device="cpu") for k in (4, 3, 3)]
     wp.launch(_probe, dim=n, inputs=[wp.array(rows.astype(np.float32), dtype=Slots, device="cpu"),
                                      wp.array(wo.astype(np.float32), dtype=wp.vec3, device="cpu"),

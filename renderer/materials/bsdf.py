@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import warp as wp
 
-from renderer.optics import RgbWeightTable
+from renderer.color.rgb_weights import RgbWeightTable
 
 MAX_SLOTS = 16
 Slots = wp.types.matrix(shape=(MAX_SLOTS, 3), dtype=wp.float32)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import warp as wp
 
 from renderer.materials.bsdf import BSDF, BSDFSample, failed_sample, reflect_z, refract
-from renderer.optics import fresnel_dielectric
+from renderer.optics.fresnel import fresnel_dielectric
 from renderer.materials.microfacet import (ggx_D, ggx_G, ggx_sample_visible, ggx_visible_pdf, is_smooth,
                                            roughness_to_alpha)
 

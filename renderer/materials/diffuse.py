@@ -4,7 +4,8 @@ from __future__ import annotations
 import warp as wp
 
 from renderer.materials.bsdf import BSDF, BSDFSample, failed_sample, same_hemisphere
-from renderer.sampling import INV_PI, cosine_hemisphere
+from renderer.vecmath import INV_PI
+from renderer.sampling.warps import cosine_hemisphere
 
 NAME = "diffuse"
 

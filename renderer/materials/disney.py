@@ -33,8 +33,9 @@ from renderer.materials.dielectric import eval as dielectric_eval
 from renderer.materials.dielectric import pdf as dielectric_pdf
 from renderer.materials.dielectric import sample as dielectric_sample
 from renderer.materials.microfacet import ggx_D, ggx_G, ggx_G1, ggx_sample_visible, ggx_visible_pdf, gtr1_D, gtr1_sample
-from renderer.optics import fresnel_dielectric
-from renderer.sampling import INV_PI, cosine_hemisphere, luminance, max3
+from renderer.optics.fresnel import fresnel_dielectric
+from renderer.vecmath import INV_PI, luminance, max3
+from renderer.sampling.warps import cosine_hemisphere
 
 NAME = "disney"
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import warp as wp
 
-from renderer.sampling import PI
+from renderer.vecmath import PI
 
 
 @wp.func

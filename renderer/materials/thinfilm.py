@@ -26,28 +26,16 @@ import warp as wp
 
 from renderer.errors import SceneError
 from renderer.materials.bsdf import BSDF, BSDFSample, failed_sample, reflect_z, refract, same_hemisphere
-from renderer.optics import thin_film_rgb3, thin_film_rgb_sampled
-from renderer.sampling import INV_PI, cosine_hemisphere, max3
+from renderer.optics.thin_film import thin_film_rgb3, thin_film_rgb_sampled
+from renderer.vecmath import INV_PI, max3
+from renderer.sampling.warps import cosine_hemisphere
 
 if TYPE_CHECKING:
     from renderer.materials import SlotBuilder
 
 NAME = "thinfilm"
 
-#: The render option's default: 32 jittered wavelengths per evaluation (see docs/thinfilm.md).
-DEFAULT_MODE = "spectral:32"
-
 ETA_OUTER, ETA_FILM, ETA_INNER, K_INNER, THICKNESS, THICKNESS_MAP, THICKNESS_SCALE, TRANSMISSION, BASE = range(9)
-
-
-def spectral_samples(mode: str) -> int:
-    """Wavelengths per thin-film evaluation for a render mode: ``rgb3`` → 0, ``spectral:N`` → N."""
-    if mode == "rgb3":
-        return 0
-    name, _, count = mode.partition(":")
-    if name == "spectral" and count.isdigit() and int(count) >= 1:
-        return int(count)
-    raise ValueError(f"unknown thin-film mode {mode!r}: use 'rgb3' or 'spectral:N' (N >= 1)")
 
 
 def slots(s: SlotBuilder) -> list[int]:

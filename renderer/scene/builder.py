@@ -8,7 +8,6 @@ one written acts first on the geometry. At ``Camera`` the CTM is camera-from-wor
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Iterable
@@ -23,6 +22,8 @@ from renderer.scene.params import Param, ParamSet
 from renderer.scene.parser import Directive
 from renderer.scene.plymesh import ply_mesh
 from renderer.scene.shapes import bilinear_mesh, disk, sphere, triangle_mesh
+from renderer.scene.transform import (from_pbrt_matrix, inverse, look_at, rotate, scale, swaps_handedness,
+                                      transformed_mesh, translate)
 
 #: pbrt-v4 features this renderer does not implement. "warn": ignored with a located warning,
 #: because the picture stays essentially right; "error": refused, because ignoring them would
@@ -84,68 +85,18 @@ WORLD_ONLY = frozenset({"AttributeBegin", "AttributeEnd", "Attribute", "Shape", 
                         "ObjectEnd", "ObjectInstance", "LightSource", "AreaLightSource", "Material",
                         "MakeNamedMaterial", "NamedMaterial", "Texture"})
 
-# --- transforms (pbrt's conventions) ---------------------------------------------------------
-
-def translate(d: np.ndarray) -> np.ndarray:
-    m = np.eye(4)
-    m[:3, 3] = d
-    return m
 
 
-def scale(s: np.ndarray) -> np.ndarray:
-    return np.diag([*s, 1.0])
 
 
-def rotate(degrees: float, axis: np.ndarray, loc: Location) -> np.ndarray:
-    """Rotation by ``degrees`` about ``axis`` (Rodrigues' formula, as pbrt's Rotate)."""
-    n = np.linalg.norm(axis)
-    if n == 0.0:
-        raise SceneError("Rotate: the axis has zero length", loc)
-    a = np.asarray(axis) / n
-    t = math.radians(degrees)
-    k = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
-    m = np.eye(4)
-    m[:3, :3] = np.eye(3) + math.sin(t) * k + (1.0 - math.cos(t)) * (k @ k)
-    return m
 
 
-def look_at(eye: np.ndarray, target: np.ndarray, up: np.ndarray, loc: Location) -> np.ndarray:
-    """pbrt's LookAt, which returns camera-from-world: camera +z = the view direction,
-    +x = cross(up, dir) and +y = cross(dir, +x), a left-handed frame as pbrt's."""
-    d = target - eye
-    if np.linalg.norm(d) == 0.0:
-        raise SceneError("LookAt: the eye and the point looked at coincide", loc)
-    d = d / np.linalg.norm(d)
-    if np.linalg.norm(up) == 0.0:
-        raise SceneError("LookAt: the up vector has zero length", loc)
-    right = np.cross(up / np.linalg.norm(up), d)
-    if np.linalg.norm(right) < 1e-12:
-        raise SceneError("LookAt: the up vector and the viewing direction are parallel", loc)
-    right /= np.linalg.norm(right)
-    world_from_camera = np.eye(4)
-    world_from_camera[:3, 0], world_from_camera[:3, 1] = right, np.cross(d, right)
-    world_from_camera[:3, 2], world_from_camera[:3, 3] = d, eye
-    return np.linalg.inv(world_from_camera)
 
 
-def from_pbrt_matrix(values: list[float]) -> np.ndarray:
-    """The 16 numbers of Transform/ConcatTransform: pbrt reads them row by row and transposes,
-    so the last four hold the translation (each group of four is a column)."""
-    return np.asarray(values, dtype=np.float64).reshape(4, 4).T
 
 
-def swaps_handedness(m: np.ndarray) -> bool:
-    return bool(np.linalg.det(m[:3, :3]) < 0.0)
 
 
-def _inverse(m: np.ndarray, what: str, loc: Location) -> np.ndarray:
-    try:
-        inv = np.linalg.inv(m)
-    except np.linalg.LinAlgError:
-        inv = None
-    if inv is None or not np.all(np.isfinite(inv)):
-        raise SceneError(f"{what}: the current transform is singular", loc)
-    return inv
 
 
 # --- graphics state ----------------------------------------------------------------------------
@@ -302,7 +253,7 @@ class Builder:
         focal_distance = p.float("focaldistance", 1e6)
         if focal_distance <= 0.0:
             raise SceneError(f'Camera: "focaldistance" must be > 0, got {focal_distance}', d.loc)
-        world_from_camera = _inverse(self.state.ctm, "Camera", d.loc)
+        world_from_camera = inverse(self.state.ctm, "Camera", d.loc)
         self.named_coordinate_systems["camera"] = world_from_camera
         self.scene.camera = CameraDesc(world_from_camera, fov, lens_radius, focal_distance)
         self.warn_unused(d)
@@ -494,7 +445,7 @@ class Builder:
             if self.state.area_light is not None:
                 raise SceneError("area lights inside ObjectBegin/ObjectEnd are not supported (nor by pbrt-v4)",
                                  d.loc)
-            mesh = _transformed(mesh, _inverse(obj.ctm, "ObjectBegin", obj.loc) @ ctm)
+            mesh = transformed_mesh(mesh, inverse(obj.ctm, "ObjectBegin", obj.loc) @ ctm)
         self.scene.meshes.append(mesh)
         self.scene.shapes.append(ShapeDesc(
             mesh=len(self.scene.meshes) - 1, material=self._current_material(d.loc),
@@ -587,14 +538,3 @@ class Builder:
         return ctm @ T
 
 
-def _transformed(mesh: MeshDesc, m: np.ndarray) -> MeshDesc:
-    """Bake an affine transform into a mesh; normals go with the inverse transpose."""
-    if np.allclose(m, np.eye(4), rtol=0.0, atol=1e-12):
-        return mesh
-    a = m[:3, :3]
-    P = (mesh.positions.astype(np.float64) @ a.T + m[:3, 3]).astype(np.float32)
-    N = None
-    if mesh.normals is not None:
-        n = mesh.normals.astype(np.float64) @ np.linalg.inv(a)
-        N = (n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)).astype(np.float32)
-    return replace(mesh, positions=P, normals=N)

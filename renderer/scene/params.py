@@ -130,7 +130,7 @@ class ParamSet:
         elif p.type == "blackbody":
             if len(p.values) != 1 or not float(p.values[0]) > 0:
                 raise SceneError(f'parameter "{name}": blackbody needs one positive temperature in kelvin', p.loc)
-            from renderer.color import blackbody_rgb
+            from renderer.color.rgb import blackbody_rgb
 
             v = blackbody_rgb(float(p.values[0]))
         elif p.type == "spectrum" and len(p.values) == 1 and not isinstance(p.values[0], str):

@@ -9,11 +9,12 @@ import warp as wp
 
 from renderer.camera import Camera, build_camera
 from renderer.errors import SceneError
-from renderer.geometry import Geometry, GeometryData, build_geometry
+from renderer.geometry.instances import Geometry, GeometryData, build_geometry
 from renderer.lights import AREA, DISTANT, LightTable, Lights
 from renderer.materials import Materials, build_materials, disney, thinfilm
-from renderer.optics import RgbWeightTable, make_rgb_weight_table
+from renderer.color.rgb_weights import RgbWeightTable, make_rgb_weight_table
 from renderer.scene.description import SceneDescription
+from renderer.settings import THIN_FILM_MODE, thin_film_samples
 from renderer.textures import Textures, TextureTable
 
 
@@ -58,7 +59,7 @@ class DeviceScene:
 def _spectral_table(needed: bool, thin_film: str, device: str) -> tuple[RgbWeightTable, int]:
     """The colour-matching table the thin-film BSDF integrates with, uploaded only when a thinfilm
     material is in the scene and the mode samples wavelengths; otherwise a one-entry stand-in."""
-    n = thinfilm.spectral_samples(thin_film)
+    n = thin_film_samples(thin_film)
     if needed and n > 0:
         return make_rgb_weight_table(device), n
     table = RgbWeightTable()
@@ -68,7 +69,7 @@ def _spectral_table(needed: bool, thin_film: str, device: str) -> tuple[RgbWeigh
 
 
 def upload(desc: SceneDescription, device: str, width: int | None = None, height: int | None = None,
-           nee: bool = True, thin_film: str = thinfilm.DEFAULT_MODE) -> DeviceScene:
+           nee: bool = True, thin_film: str = THIN_FILM_MODE) -> DeviceScene:
     width = width or desc.film.width
     height = height or desc.film.height
     if not desc.instance_sets:
@@ -112,7 +113,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
         image = None
         if inf.filename is not None:
             from renderer.errors import MissingFileError
-            from renderer.imageio import read_image
+            from renderer.io.images import read_image
 
             if not inf.filename.is_file():
                 raise MissingFileError(inf.filename, inf.loc, "environment image")

@@ -58,7 +58,7 @@ def read_exr(path: str | Path) -> tuple[dict[str, np.ndarray], dict[str, object]
 def read_image(path: str | Path, *, srgb: bool | None = None) -> np.ndarray:
     """Any supported image as linear float32 (H, W, C). 8-bit images are decoded from sRGB unless
     ``srgb`` is False; EXR and 16-bit/float images are taken as linear."""
-    from renderer.color import srgb_to_linear
+    from renderer.color.rgb import srgb_to_linear
 
     path = Path(path)
     if path.suffix.lower() == ".exr":
@@ -83,7 +83,7 @@ def write_png(path: str | Path, rgb_linear: np.ndarray, exposure: float = 0.0) -
     """Tone-map linear RGB to 8-bit sRGB (exposure in stops, then clip) and write it atomically."""
     from PIL import Image
 
-    from renderer.color import linear_to_srgb
+    from renderer.color.rgb import linear_to_srgb
 
     x = np.nan_to_num(np.asarray(rgb_linear, dtype=np.float64), nan=0.0) * (2.0 ** exposure)
     img = (linear_to_srgb(x) * 255.0 + 0.5).astype(np.uint8)

@@ -12,62 +12,18 @@ from functools import lru_cache
 import warp as wp
 
 from renderer.camera import generate_ray
-from renderer.device_scene import Features, Scene
-from renderer.geometry import intersect, occluded, offset_origin, ray_epsilon, surface_at
+from renderer.device.scene import Features, Scene
+from renderer.geometry.intersect import intersect, occluded, surface_at
+from renderer.geometry.offsets import offset_origin, ray_epsilon
 from renderer.lights import DISTANT, area_emitted, area_pdf, distant_cone_radiance, env_pdf, env_radiance, sample_light
 from renderer.materials import dispatch_table
-from renderer.materials.bsdf import BSDF, MAX_SLOTS, BSDFSample, Slots
-from renderer.sampling import frame_from_tangent, max3, power_heuristic, sample_rng, to_local, to_world
-from renderer.subsurface import subsurface_scatter
-from renderer.textures import texture_eval
-
-#: Depth from which Russian roulette may end a path by default; a negative value in the settings
-#: turns it off. pbrt-v4 starts after the second bounce (2); `benchmarks/study.py` measured 4 as
-#: 2.4x more efficient (relMSE x time) on the thin-film figure, whose dark coated spheres make early
-#: roulette kill most paths, and equal on the demo scene.
-RR_DEPTH = 4
-#: Finite-difference step in texture space for bump mapping (pbrt's fallback without ray differentials).
-BUMP_DELTA = 0.0005
-
-
-@wp.func
-def load_bsdf(scene: Scene, m: int, uv: wp.vec2) -> BSDF:
-    """Evaluate a material's parameter textures at uv into the rows of ``BSDF.p``."""
-    p = Slots()
-    for j in range(MAX_SLOTS):
-        tid = scene.mat.slots[m, j]
-        if tid >= 0:
-            v = texture_eval(scene.tex, tid, uv)
-            p[j, 0] = v[0]
-            p[j, 1] = v[1]
-            p[j, 2] = v[2]
-    b = BSDF()
-    b.kind = scene.mat.kind[m]
-    b.p = p
-    b.spectral = scene.spectral
-    b.spectral_n = scene.spectral_n
-    return b
-
-
-@wp.func
-def bump_normal(scene: Scene, tid: int, uv: wp.vec2, ns: wp.vec3, dpdu: wp.vec3, dpdv: wp.vec3) -> wp.vec3:
-    """Shading normal perturbed by a float displacement texture (pbrt's bump mapping, without the
-    dn/du term): the displaced surface's tangents cross to the new normal."""
-    d = texture_eval(scene.tex, tid, uv)[0]
-    du = BUMP_DELTA
-    dv = BUMP_DELTA
-    d_u = texture_eval(scene.tex, tid, wp.vec2(uv[0] + du, uv[1]))[0]
-    d_v = texture_eval(scene.tex, tid, wp.vec2(uv[0], uv[1] + dv))[0]
-    su = dpdu + ns * ((d_u - d) / du)
-    sv = dpdv + ns * ((d_v - d) / dv)
-    n = wp.cross(su, sv)
-    ln = wp.length(n)
-    if ln <= 0.0:
-        return ns
-    n = n / ln
-    if wp.dot(n, ns) < 0.0:
-        n = -n
-    return n
+from renderer.materials.bsdf import BSDFSample
+from renderer.sampling.frames import frame_from_tangent, to_local, to_world
+from renderer.vecmath import max3
+from renderer.sampling.mis import power_heuristic
+from renderer.sampling.rng import sample_rng
+from renderer.integrators.shading import bump_normal, load_bsdf
+from renderer.integrators.subsurface import subsurface_scatter
 
 
 @lru_cache(maxsize=None)

@@ -8,7 +8,8 @@ from __future__ import annotations
 import numpy as np
 import warp as wp
 
-from renderer.geometry import Geometry, build_geometry, intersect
+from renderer.geometry.instances import Geometry, build_geometry
+from renderer.geometry.intersect import intersect
 
 
 @wp.kernel

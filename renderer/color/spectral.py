@@ -93,6 +93,22 @@ def _cumulative_rgb_weight(wavelengths_nm: np.ndarray) -> np.ndarray:
     return nodes[k] + step * (w[k] * t + 0.5 * (w[k + 1] - w[k]) * t * t)
 
 
+#: More wavelengths than the 1 nm table has cannot add accuracy, only time.
+MAX_SPECTRAL_SAMPLES = 1024
+
+
+def parse_mode(mode: str) -> tuple[str, int]:
+    """The one parser of thin-film colour modes: ``rgb3`` → ("rgb3", 0), ``spectral:N`` →
+    ("spectral", N) with 1 <= N <= MAX_SPECTRAL_SAMPLES, ``reference`` → ("reference", 0)."""
+    if mode in ("rgb3", "reference"):
+        return mode, 0
+    name, _, count = mode.partition(":")
+    if name == "spectral" and count.isdigit() and 1 <= int(count) <= MAX_SPECTRAL_SAMPLES:
+        return name, int(count)
+    raise ValueError(f"unknown thin-film mode {mode!r}: use 'rgb3', 'spectral:N' (1 <= N <= "
+                     f"{MAX_SPECTRAL_SAMPLES}) or 'reference'")
+
+
 def mode_wavelengths(mode: str) -> tuple[np.ndarray, np.ndarray, float]:
     """(wavelengths (n,), RGB weights (n, 3), band width in nm each sample stands for) of a mode.
 
@@ -113,16 +129,9 @@ def mode_wavelengths(mode: str) -> tuple[np.ndarray, np.ndarray, float]:
         q = np.full_like(lam, TABLE_STEP_NM)
         q[[0, -1]] *= 0.5
         return lam, spectrum_to_rgb_weights(lam, q), TABLE_STEP_NM
-    if mode.startswith("spectral:"):
-        try:
-            n = int(mode.split(":", 1)[1])
-        except ValueError:
-            n = 0
-        if n < 1:
-            raise ValueError(f"spectral mode needs a positive sample count, got {mode!r}")
-        step = span / n
-        edges = LAMBDA_MIN_NM + np.arange(n + 1) * step
-        cumulative = _cumulative_rgb_weight(edges)
-        weights = np.diff(cumulative, axis=0)
-        return 0.5 * (edges[:-1] + edges[1:]), weights / weights.sum(axis=0), step
-    raise ValueError(f"unknown thin-film mode {mode!r}: use 'rgb3', 'spectral:N' or 'reference'")
+    _, n = parse_mode(mode)
+    step = span / n
+    edges = LAMBDA_MIN_NM + np.arange(n + 1) * step
+    cumulative = _cumulative_rgb_weight(edges)
+    weights = np.diff(cumulative, axis=0)
+    return 0.5 * (edges[:-1] + edges[1:]), weights / weights.sum(axis=0), step

@@ -28,12 +28,15 @@ from __future__ import annotations
 
 import warp as wp
 
-from renderer.device_scene import Scene
-from renderer.geometry import Hit, Surface, intersect, ray_epsilon, surface_at
+from renderer.device.scene import Scene
+from renderer.geometry.intersect import Hit, Surface, intersect, surface_at
+from renderer.geometry.offsets import ray_epsilon
 from renderer.materials import kind_id
 from renderer.materials.bsdf import BSDF
 from renderer.materials.disney import exit_bsdf, subsurface_lobe
-from renderer.sampling import PI, frame_from_normal, hash_u32, max3
+from renderer.vecmath import PI, max3
+from renderer.sampling.frames import frame_from_normal
+from renderer.sampling.rng import hash_u32
 
 DISNEY = wp.constant(kind_id("disney"))
 #: Probe sphere radius in units of the largest profile scale d = 1/s: the profile's mass beyond

@@ -11,9 +11,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import warp as wp
 
-from renderer.distribution import distribution_2d, sample_cdf
+from renderer.sampling.equal_area import equal_area_sphere_to_square, equal_area_square_to_sphere
+from renderer.sampling.distribution import distribution_2d, sample_cdf
 from renderer.errors import SceneError
-from renderer.sampling import PI, frame_from_normal, to_world, uniform_cone
+from renderer.vecmath import PI
+from renderer.sampling.frames import frame_from_normal, to_world
+from renderer.sampling.warps import uniform_cone
 
 ENV = 0
 DISTANT = 1
@@ -59,50 +62,8 @@ class LightSample:
 
 # ---- infinite light ---------------------------------------------------------------------------
 
-@wp.func
-def equal_area_square_to_sphere(p: wp.vec2) -> wp.vec3:
-    """Clarberg's octahedral equal-area map of [0,1]² onto the sphere (pbrt-v4's layout)."""
-    u = 2.0 * p[0] - 1.0
-    v = 2.0 * p[1] - 1.0
-    up = wp.abs(u)
-    vp = wp.abs(v)
-    sd = 1.0 - (up + vp)
-    d = wp.abs(sd)
-    r = 1.0 - d
-    phi = PI / 4.0
-    if r > 0.0:
-        phi = ((vp - up) / r + 1.0) * PI / 4.0
-    z = wp.where(sd >= 0.0, 1.0 - r * r, -(1.0 - r * r))
-    cp = wp.where(u >= 0.0, wp.abs(wp.cos(phi)), -wp.abs(wp.cos(phi)))
-    sp = wp.where(v >= 0.0, wp.abs(wp.sin(phi)), -wp.abs(wp.sin(phi)))
-    s = r * wp.sqrt(wp.max(0.0, 2.0 - r * r))
-    return wp.vec3(cp * s, sp * s, z)
 
 
-@wp.func
-def equal_area_sphere_to_square(d: wp.vec3) -> wp.vec2:
-    x = wp.abs(d[0])
-    y = wp.abs(d[1])
-    z = wp.abs(d[2])
-    r = wp.sqrt(wp.max(0.0, 1.0 - z))
-    a = wp.max(x, y)
-    b = wp.min(x, y)
-    if a > 0.0:
-        b = b / a
-    else:
-        b = 0.0
-    phi = wp.atan(b) * 2.0 / PI
-    if x < y:
-        phi = 1.0 - phi
-    v = phi * r
-    u = r - v
-    if d[2] < 0.0:
-        t = u
-        u = 1.0 - v
-        v = 1.0 - t
-    u = wp.where(d[0] >= 0.0, u, -u)
-    v = wp.where(d[1] >= 0.0, v, -v)
-    return wp.vec2(0.5 * (u + 1.0), 0.5 * (v + 1.0))
 
 
 @wp.func

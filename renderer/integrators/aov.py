@@ -12,12 +12,13 @@ import numpy as np
 import warp as wp
 
 from renderer.camera import generate_ray
-from renderer.device_scene import Features, Scene
-from renderer.geometry import intersect, surface_at
-from renderer.integrator import bump_normal, load_bsdf
+from renderer.device.scene import Features, Scene
+from renderer.geometry.intersect import intersect, surface_at
+from renderer.integrators.shading import bump_normal, load_bsdf
 from renderer.materials import dispatch_table
 from renderer.materials.bsdf import BSDFSample
-from renderer.sampling import frame_from_tangent, sample_rng, to_local
+from renderer.sampling.frames import frame_from_tangent, to_local
+from renderer.sampling.rng import sample_rng
 
 AOV_NAMES = ("albedo", "normal", "depth")
 #: Channel names per AOV in the EXR (layer.channel, as OpenEXR's multi-layer convention).

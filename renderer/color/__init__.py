@@ -1,0 +1,1 @@
+"""Colour: sRGB conversions, blackbody, CIE spectral tables and their device weight table."""

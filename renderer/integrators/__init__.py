@@ -1,0 +1,1 @@
+"""Kernels that trace paths: the shared shading step, the path tracer, subsurface walks and AOVs."""

@@ -1,0 +1,1 @@
+"""Files in and out: images, checkpoints, scene fingerprints, denoising and error metrics."""

@@ -1,0 +1,1 @@
+"""Sample generation: random numbers, warps to directions, distributions, frames and MIS weights."""

@@ -1,0 +1,97 @@
+"""pbrt's transform directives as 4x4 matrices, and the matrix helpers the builder needs.
+
+Conventions follow pbrt: matrices map column vectors (``p' = M p``); ``LookAt`` yields
+camera-from-world in pbrt's left-handed camera frame (+z forward, +y up, +x = up x forward).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from renderer.errors import Location, SceneError
+from renderer.scene.description import MeshDesc
+
+
+def translate(d: np.ndarray) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, 3] = d
+    return m
+
+
+def scale(s: np.ndarray) -> np.ndarray:
+    return np.diag([*s, 1.0])
+
+
+def rotate(degrees: float, axis: np.ndarray, loc: Location) -> np.ndarray:
+    """Rotation by ``degrees`` about ``axis`` (Rodrigues' formula, as pbrt's Rotate)."""
+    n = np.linalg.norm(axis)
+    if n == 0.0:
+        raise SceneError("Rotate: the axis has zero length", loc)
+    a = np.asarray(axis) / n
+    t = math.radians(degrees)
+    k = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+    m = np.eye(4)
+    m[:3, :3] = np.eye(3) + math.sin(t) * k + (1.0 - math.cos(t)) * (k @ k)
+    return m
+
+
+def world_from_camera(eye, target, up) -> np.ndarray:
+    """The camera-to-world matrix of pbrt's ``LookAt``: +z = the view direction, +x = up x dir,
+    +y = dir x (+x). Raises ValueError for a degenerate eye, target or up."""
+    eye, target, up = (np.asarray(v, dtype=np.float64) for v in (eye, target, up))
+    d = target - eye
+    if np.linalg.norm(d) == 0.0:
+        raise ValueError("the eye and the point looked at coincide")
+    if np.linalg.norm(up) == 0.0:
+        raise ValueError("the up vector has zero length")
+    d = d / np.linalg.norm(d)
+    right = np.cross(up / np.linalg.norm(up), d)
+    if np.linalg.norm(right) < 1e-12:
+        raise ValueError("the up vector and the viewing direction are parallel")
+    right /= np.linalg.norm(right)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = right, np.cross(d, right), d, eye
+    return m
+
+
+def look_at(eye: np.ndarray, target: np.ndarray, up: np.ndarray, loc: Location) -> np.ndarray:
+    """pbrt's LookAt directive, which yields camera-from-world."""
+    try:
+        return np.linalg.inv(world_from_camera(eye, target, up))
+    except ValueError as e:
+        raise SceneError(f"LookAt: {e}", loc) from None
+
+
+def from_pbrt_matrix(values: list[float]) -> np.ndarray:
+    """The 16 numbers of Transform/ConcatTransform: pbrt reads them row by row and transposes,
+    so the last four hold the translation (each group of four is a column)."""
+    return np.asarray(values, dtype=np.float64).reshape(4, 4).T
+
+
+def swaps_handedness(m: np.ndarray) -> bool:
+    return bool(np.linalg.det(m[:3, :3]) < 0.0)
+
+
+def inverse(m: np.ndarray, what: str, loc: Location) -> np.ndarray:
+    try:
+        inv = np.linalg.inv(m)
+    except np.linalg.LinAlgError:
+        inv = None
+    if inv is None or not np.all(np.isfinite(inv)):
+        raise SceneError(f"{what}: the current transform is singular", loc)
+    return inv
+
+
+def transformed_mesh(mesh: MeshDesc, m: np.ndarray) -> MeshDesc:
+    """Bake an affine transform into a mesh; normals go with the inverse transpose."""
+    if np.allclose(m, np.eye(4), rtol=0.0, atol=1e-12):
+        return mesh
+    a = m[:3, :3]
+    P = (mesh.positions.astype(np.float64) @ a.T + m[:3, 3]).astype(np.float32)
+    N = None
+    if mesh.normals is not None:
+        n = mesh.normals.astype(np.float64) @ np.linalg.inv(a)
+        N = (n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)).astype(np.float32)
+    return replace(mesh, positions=P, normals=N)

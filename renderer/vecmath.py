@@ -1,0 +1,25 @@
+"""Small device math every kernel shares: π and a few vector reductions."""
+from __future__ import annotations
+
+import warp as wp
+
+
+PI = wp.constant(3.14159265358979323846)
+
+
+INV_PI = wp.constant(0.31830988618379067154)
+
+
+@wp.func
+def max3(v: wp.vec3) -> float:
+    return wp.max(v[0], wp.max(v[1], v[2]))
+
+
+@wp.func
+def luminance(c: wp.vec3) -> float:
+    return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+
+
+@wp.func
+def max_abs(p: wp.vec3) -> float:
+    return max3(wp.vec3(wp.abs(p[0]), wp.abs(p[1]), wp.abs(p[2])))
