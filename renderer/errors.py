@@ -35,3 +35,16 @@ class MissingFileError(SceneError):
     def __init__(self, path: str | Path, loc: Location | None = None, what: str = "file"):
         self.path = Path(path)
         super().__init__(f"{what} not found: {path}", loc)
+
+
+class UnsupportedError(SceneError):
+    """A type name (material, texture, light, shape, ...) this renderer does not implement. The
+    builder collects these and reports every one at once, each with its file and line."""
+
+
+class SceneErrors(SceneError):
+    """Several located errors found in one pass over a scene, reported together (one per line)."""
+
+    def __init__(self, errors: list[SceneError]):
+        self.errors = list(errors)
+        super().__init__("\n".join(str(e) for e in self.errors))
