@@ -1,27 +1,22 @@
-"""``assets-gen SUBCOMMAND ...``: one subcommand per generator module.
-
-Each module named in :data:`GENERATORS` defines ``register(subparsers)``, which adds its
-subcommand with ``set_defaults(run=callable)``; the callable takes the parsed arguments and
-returns the list of files written.
-"""
+"""``assets-gen SUBCOMMAND ...``: one subcommand per registered generator, plus ``recipe``."""
 from __future__ import annotations
 
 import argparse
-import importlib
 import sys
 
-from assets_gen.common import GeneratorError
-
-#: Generator modules, in the order ``--help`` lists them.
-GENERATORS: tuple[str, ...] = ("seashell", "sunglasses", "umbrella", "palm", "sky", "dunes", "ripples", "grains", "maps", "recipe")
+from assets_gen import recipe
+from assets_gen.core import GeneratorError
+from assets_gen.core.options import add_generator_parser
+from assets_gen.registry import GENERATORS
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="assets-gen", description=__doc__.splitlines()[0],
                                      formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     sub = parser.add_subparsers(dest="command", metavar="SUBCOMMAND")
-    for name in GENERATORS:
-        importlib.import_module(f"assets_gen.{name}").register(sub)
+    for gen in GENERATORS:
+        add_generator_parser(sub, gen)
+    recipe.add_parser(sub)
     return parser
 
 
@@ -30,7 +25,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if not getattr(args, "run", None):
         parser.print_help()
-        return 0 if args.command is None and GENERATORS else 2
+        return 0 if args.command is None else 2
     try:
         for path in args.run(args):
             print(path)

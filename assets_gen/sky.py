@@ -26,54 +26,20 @@ with ``Rotate -90 1 0 0`` (light +z → world +y, light +y → world −z, +x st
 Layouts (pixel (x, y), row y = 0 at the top of the file):
   lat-long, W = 2H: φ = 2π(x + 0.5)/W, θ = π(y + 0.5)/H, direction (sinθ cosφ, sinθ sinφ, cosθ);
   equal-area, W = H: (u, v) = ((x + 0.5)/W, (y + 0.5)/H) through Clarberg's octahedral equal-area
-  map (pbrt-v4's EqualAreaSquareToSphere), every pixel the same solid angle 4π/(W H).
+  map (pbrt-v4's EqualAreaSquareToSphere, through the renderer's own float32 implementation in
+  renderer.sampling.equal_area), every pixel the same solid angle 4π/(W H).
 """
 from __future__ import annotations
 
-import argparse
-from pathlib import Path
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from assets_gen.common import require, staged_output, write_manifest
+from assets_gen.core import Generator, Job, Params, param, require
 
 SUN_ANGULAR_RADIUS_DEG = 0.27
 SOLAR_ILLUMINANCE_LUX = 128_000.0   # extraterrestrial solar illuminance constant (IES, ~127.5-128 klx)
-
-
-# ---- Clarberg's equal-area octahedral map ------------------------------------------------------
-
-def equal_area_square_to_sphere(uv: np.ndarray) -> np.ndarray:
-    """[0,1]² → unit sphere, area preserving. With u' = 2u − 1, v' = 2v − 1 and r = 1 − |1 − |u'| − |v'||,
-    z = ±(1 − r²) (sign of 1 − |u'| − |v'|), φ = π/4 ((|v'| − |u'|)/r + 1), and
-    (x, y) = r √(2 − r²) (±cos φ, ±sin φ) with the signs of u' and v'."""
-    u = 2.0 * uv[..., 0] - 1.0
-    v = 2.0 * uv[..., 1] - 1.0
-    up, vp = np.abs(u), np.abs(v)
-    signed = 1.0 - (up + vp)
-    r = 1.0 - np.abs(signed)
-    phi = np.where(r > 0, ((vp - up) / np.where(r > 0, r, 1.0) + 1.0) * np.pi / 4.0, np.pi / 4.0)
-    z = np.copysign(1.0 - r * r, signed)
-    s = r * np.sqrt(np.maximum(0.0, 2.0 - r * r))
-    return np.stack([np.copysign(np.cos(phi), u) * s, np.copysign(np.sin(phi), v) * s, z], axis=-1)
-
-
-def equal_area_sphere_to_square(d: np.ndarray) -> np.ndarray:
-    """Inverse of :func:`equal_area_square_to_sphere`: r = √(1 − |z|), φ' = (2/π) atan(min/max of
-    |x|, |y|) folded about the diagonal, then unfolded to the lower hemisphere's outer triangles."""
-    x, y, z = np.abs(d[..., 0]), np.abs(d[..., 1]), np.abs(d[..., 2])
-    r = np.sqrt(np.maximum(0.0, 1.0 - z))
-    a, b = np.maximum(x, y), np.minimum(x, y)
-    phi = np.arctan(np.where(a > 0, b / np.where(a > 0, a, 1.0), 0.0)) * 2.0 / np.pi
-    phi = np.where(x < y, 1.0 - phi, phi)
-    v = phi * r
-    u = r - v
-    south = d[..., 2] < 0
-    u, v = np.where(south, 1.0 - v, u), np.where(south, 1.0 - u, v)
-    u = np.copysign(u, d[..., 0])
-    v = np.copysign(v, d[..., 1])
-    return np.stack([0.5 * (u + 1.0), 0.5 * (v + 1.0)], axis=-1)
 
 
 def latlong_directions(height: int) -> np.ndarray:
@@ -86,9 +52,12 @@ def latlong_directions(height: int) -> np.ndarray:
 
 
 def equal_area_directions(size: int) -> np.ndarray:
-    """Pixel-centre directions (N, N, 3) of an equal-area square map (u along x, v along rows)."""
+    """Pixel-centre directions (N, N, 3) of an equal-area square map (u along x, v along rows),
+    through the renderer's own map, so the sky is written where the renderer will look it up."""
+    from renderer.sampling.equal_area import square_to_sphere
+
     c = (np.arange(size) + 0.5) / size
-    return equal_area_square_to_sphere(np.stack(np.meshgrid(c, c, indexing="xy"), -1))
+    return square_to_sphere(np.stack(np.meshgrid(c, c, indexing="xy"), -1)).astype(np.float64)
 
 
 # ---- Preetham 1999 -----------------------------------------------------------------------------
@@ -170,19 +139,34 @@ def diffuse_horizontal_klx(rgb: np.ndarray, dirs: np.ndarray, solid_angle: np.nd
     return float((lum * np.maximum(dirs[..., 2], 0.0) * solid_angle).sum())
 
 
-def generate(out_dir: str | Path, elevation_deg: float = 45.0, azimuth_deg: float = 0.0, turbidity: float = 3.0,
-             resolution: int = 512, layout: str = "both", ground_albedo: float = 0.0, seed: int = 0) -> list[str]:
-    """Write ``sky_latlong.exr`` (2R × R) and/or ``sky_equalarea.exr`` (R × R) and ``sky.json``.
-    The model is deterministic: the seed is recorded but draws nothing."""
-    params = dict(elevation_deg=elevation_deg, azimuth_deg=azimuth_deg, turbidity=turbidity,
-                  resolution=resolution, layout=layout, ground_albedo=ground_albedo)
-    require(0.5 <= elevation_deg <= 90.0, f"sun elevation must be 0.5..90 deg (Preetham has no night), got {elevation_deg}")
-    require(2.0 <= turbidity <= 10.0, f"turbidity must be 2..10 (the model's fitted range), got {turbidity}")
-    require(8 <= resolution <= 8192, f"resolution must be 8..8192, got {resolution}")
-    require(layout in ("both", "latlong", "equal-area"), f"layout must be both, latlong or equal-area, got {layout!r}")
-    require(0.0 <= ground_albedo <= 1.0, f"ground albedo must be 0..1, got {ground_albedo}")
+@dataclass(frozen=True)
+class SkyParams(Params):
+    elevation_deg: float = param(45.0, "sun elevation above the horizon, degrees")
+    azimuth_deg: float = param(0.0, "sun azimuth, light frame +x towards +y, degrees")
+    turbidity: float = param(3.0, "atmospheric turbidity, 2..10")
+    resolution: int = param(512, "map height in pixels")
+    layout: str = param("both", "which maps to write", choices=("both", "latlong", "equal-area"))
+    ground_albedo: float = param(0.0, "below-horizon Lambertian ground albedo, 0 = black")
+
+    def validate(self) -> None:
+        require(0.5 <= self.elevation_deg <= 90.0,
+                f"sun elevation must be 0.5..90 deg (Preetham has no night), got {self.elevation_deg}")
+        require(2.0 <= self.turbidity <= 10.0,
+                f"turbidity must be 2..10 (the model's fitted range), got {self.turbidity}")
+        require(8 <= self.resolution <= 8192, f"resolution must be 8..8192, got {self.resolution}")
+        require(self.layout in ("both", "latlong", "equal-area"),
+                f"layout must be both, latlong or equal-area, got {self.layout!r}")
+        require(0.0 <= self.ground_albedo <= 1.0, f"ground albedo must be 0..1, got {self.ground_albedo}")
+
+
+def write(job: Job) -> list[str]:
+    """``sky_latlong.exr`` (2R × R) and/or ``sky_equalarea.exr`` (R × R); the manifest also holds the
+    sun and the sky's illuminances. The model is deterministic: the seed is recorded but draws nothing."""
     from renderer.io.images import write_exr
 
+    p = job.params
+    elevation_deg, azimuth_deg, turbidity, resolution, layout = (
+        p.elevation_deg, p.azimuth_deg, p.turbidity, p.resolution, p.layout)
     sun = sun_direction(elevation_deg, azimuth_deg)
     light = sun_light(sun, turbidity)
     ea_dirs = equal_area_directions(resolution)
@@ -190,7 +174,7 @@ def generate(out_dir: str | Path, elevation_deg: float = 45.0, azimuth_deg: floa
     e_dh = diffuse_horizontal_klx(ea, ea_dirs, np.full(ea.shape[:2], 4.0 * np.pi / resolution ** 2))
     e_sun = light["rgb_irradiance"] * sun[2]
     horizontal = np.einsum("ijk,ij->k", ea, np.maximum(ea_dirs[..., 2], 0)) * 4.0 * np.pi / resolution ** 2 + e_sun
-    ground = ground_albedo / np.pi * horizontal                                # Lambertian ground radiance
+    ground = p.ground_albedo / np.pi * horizontal                                # Lambertian ground radiance
     maps = {}
     if layout in ("both", "equal-area"):
         maps["sky_equalarea.exr"] = np.where((ea_dirs[..., 2] > 0)[..., None], ea, ground)
@@ -207,24 +191,10 @@ def generate(out_dir: str | Path, elevation_deg: float = 45.0, azimuth_deg: floa
             "sun_distant_light": "LightSource \"distant\" with \"point3 from\" = direction_world_y_up, "
                                  "\"rgb L\" = rgb_irradiance (a distant light's L is the irradiance it "
                                  f"delivers), \"float angularradius\" [{SUN_ANGULAR_RADIUS_DEG}]"}
-    with staged_output(out_dir) as stage:
-        for name, img in maps.items():
-            write_exr(stage / name, img.astype(np.float32))
-        write_manifest(stage / "sky.json", "sky", {**params, **info}, seed, sorted(maps))
-    return [str(Path(out_dir) / n) for n in (*sorted(maps), "sky.json")]
+    for name, img in maps.items():
+        write_exr(job.stage / name, img.astype(np.float32))
+    job.note(**info)
+    return sorted(maps)
 
 
-def register(subparsers: Any) -> None:
-    p = subparsers.add_parser("sky", help="Preetham clear-sky HDR environment map (EXR) and matching sun",
-                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--elevation-deg", type=float, default=45.0, help="sun elevation above the horizon (default 45)")
-    p.add_argument("--azimuth-deg", type=float, default=0.0, help="sun azimuth, light frame +x towards +y (default 0)")
-    p.add_argument("--turbidity", type=float, default=3.0, help="atmospheric turbidity, 2..10 (default 3)")
-    p.add_argument("--resolution", type=int, default=512, help="map height in pixels (default 512)")
-    p.add_argument("--layout", default="both", choices=("both", "latlong", "equal-area"), help="(default both)")
-    p.add_argument("--ground-albedo", type=float, default=0.0,
-                   help="below-horizon Lambertian ground albedo, 0 = black (default 0)")
-    p.add_argument("--seed", type=int, default=0, help="recorded only; the model is deterministic (default 0)")
-    p.add_argument("--out", type=Path, default=Path("assets") / "sky", help="output folder")
-    p.set_defaults(run=lambda a: generate(a.out, a.elevation_deg, a.azimuth_deg, a.turbidity, a.resolution,
-                                          a.layout, a.ground_albedo, a.seed))
+GENERATOR = Generator("sky", "Preetham clear-sky HDR environment map (EXR) and matching sun", SkyParams, write, __doc__)

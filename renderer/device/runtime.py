@@ -14,7 +14,8 @@ def init_warp(quiet: bool = True) -> None:
     cache = os.environ.get("WARP_CACHE_PATH")
     if cache:
         wp.config.kernel_cache_dir = cache
-    wp.config.quiet = quiet
+    # Warp's log level (1.19 dropped config.quiet): the banner and per-module load times are INFO
+    wp.config.log_level = wp.LOG_WARNING if quiet else wp.LOG_INFO
     wp.init()
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 import warp as wp
 
+from renderer.device.runtime import init_warp
 from renderer.geometry.instances import Geometry, build_geometry
 from renderer.geometry.intersect import intersect
 
@@ -27,7 +28,7 @@ def cast_rays_instanced(meshes: list[tuple[np.ndarray, np.ndarray]], inst_mesh: 
                         max_t: float = np.inf, device: str = "cpu") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(t, instance, face) of the closest hit of each ray against instanced meshes; t = inf,
     instance = face = -1 where a ray misses. Directions must be unit length."""
-    wp.init()
+    init_warp()
     data = build_geometry([(v, f, None, None) for v, f in meshes], np.asarray(inst_mesh),
                           np.zeros(len(inst_mesh), dtype=np.int32), inst_to_world, device)
     n = len(origins)

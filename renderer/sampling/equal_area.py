@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import warp as wp
 
+from renderer.device.runtime import init_warp
 from renderer.vecmath import PI
 
 
@@ -67,6 +68,7 @@ def _to_square(d: wp.array(dtype=wp.vec3), out: wp.array(dtype=wp.vec2)):
 
 
 def _launch(kernel, x: np.ndarray, n_in: int, in_type, n_out: int, out_type) -> np.ndarray:
+    init_warp()
     x = np.asarray(x, dtype=np.float32)
     flat = np.ascontiguousarray(x.reshape(-1, n_in))
     out = wp.empty(len(flat), dtype=out_type, device="cpu")

@@ -23,15 +23,12 @@ gastropod overlap each other as in the published model; each whorl is still a cl
 """
 from __future__ import annotations
 
-import argparse
 from dataclasses import asdict, dataclass, replace
-from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from assets_gen.common import require, staged_output, write_manifest
-from assets_gen.meshing import Mesh, closed_solid, grid, grid_boundary, seam_grid, thicken
+from assets_gen.core import Generator, Job, Params, param, require
+from assets_gen.core.meshing import Mesh, closed_solid, grid, grid_boundary, seam_grid, thicken
 
 
 @dataclass(frozen=True)
@@ -150,36 +147,33 @@ def shell_mesh(preset: str, length: float, wall: float, per_turn: int, around: i
     return m.transformed(np.eye(3), -scale * np.array([(lo[0] + hi[0]) / 2, lo[1], (lo[2] + hi[2]) / 2]), scale)
 
 
-def generate(out_dir: str | Path, preset: str = "conch", length: float = 0.07, wall: float = 0.08,
-             per_turn: int = 48, around: int = 40, ribs: int = 18, seed: int = 0) -> list[str]:
-    """Write ``<preset>.ply`` and ``seashell.json`` into ``out_dir``."""
-    params: dict[str, Any] = dict(preset=preset, length=length, wall=wall, per_turn=per_turn,
-                                  around=around, ribs=ribs)
-    require(preset in (*PRESETS, SCALLOP), f"unknown preset {preset!r}; choose from {[*PRESETS, SCALLOP]}")
-    require(0.005 <= length <= 1.0, f"length must be 0.005..1 m, got {length}")
-    require(0.01 <= wall <= 0.5, f"wall (share of the aperture radius) must be 0.01..0.5, got {wall}")
-    require(8 <= per_turn <= 512 and 8 <= around <= 512, "per-turn and around must be 8..512")
-    require(3 <= ribs <= 60, f"ribs must be 3..60, got {ribs}")
-    if preset != SCALLOP:
-        params["model"] = asdict(PRESETS[preset])
-    mesh = shell_mesh(preset, length, wall, per_turn, around, ribs, np.random.default_rng(seed))
-    with staged_output(out_dir) as stage:
-        mesh.write(stage / f"{preset}.ply")
-        write_manifest(stage / "seashell.json", "seashell", params, seed, [f"{preset}.ply"])
-    return [str(Path(out_dir) / f"{preset}.ply"), str(Path(out_dir) / "seashell.json")]
+@dataclass(frozen=True)
+class SeashellParams(Params):
+    preset: str = param("conch", "shell preset", choices=(*PRESETS, SCALLOP))
+    length: float = param(0.07, "largest extent, m")
+    wall: float = param(0.08, "wall thickness as a share of the aperture radius")
+    per_turn: int = param(48, "mesh rows per whorl")
+    around: int = param(40, "mesh columns around the aperture")
+    ribs: int = param(18, "scallop: radial ribs")
+
+    def validate(self) -> None:
+        require(self.preset in (*PRESETS, SCALLOP),
+                f"unknown preset {self.preset!r}; choose from {[*PRESETS, SCALLOP]}")
+        require(0.005 <= self.length <= 1.0, f"length must be 0.005..1 m, got {self.length}")
+        require(0.01 <= self.wall <= 0.5, f"wall (share of the aperture radius) must be 0.01..0.5, got {self.wall}")
+        require(8 <= self.per_turn <= 512 and 8 <= self.around <= 512, "per-turn and around must be 8..512")
+        require(3 <= self.ribs <= 60, f"ribs must be 3..60, got {self.ribs}")
 
 
-def register(subparsers: Any) -> None:
-    p = subparsers.add_parser("seashell", help="a parametric gastropod shell or a ribbed scallop (PLY)",
-                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--preset", default="conch", help=f"one of {[*PRESETS, SCALLOP]} (default conch)")
-    p.add_argument("--length", type=float, default=0.07, help="largest extent, m (default 0.07)")
-    p.add_argument("--wall", type=float, default=0.08,
-                   help="wall thickness as a share of the aperture radius (default 0.08)")
-    p.add_argument("--per-turn", type=int, default=48, help="mesh rows per whorl (default 48)")
-    p.add_argument("--around", type=int, default=40, help="mesh columns around the aperture (default 40)")
-    p.add_argument("--ribs", type=int, default=18, help="scallop: radial ribs (default 18)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--out", type=Path, default=Path("assets") / "seashell", help="output folder")
-    p.set_defaults(run=lambda a: generate(a.out, a.preset, a.length, a.wall, a.per_turn, a.around,
-                                          a.ribs, a.seed))
+def write(job: Job) -> list[str]:
+    """``<preset>.ply``; the manifest also records the preset's model parameters."""
+    p = job.params
+    if p.preset != SCALLOP:
+        job.note(model=asdict(PRESETS[p.preset]))
+    mesh = shell_mesh(p.preset, p.length, p.wall, p.per_turn, p.around, p.ribs, np.random.default_rng(job.seed))
+    mesh.write(job.stage / f"{p.preset}.ply")
+    return [f"{p.preset}.ply"]
+
+
+GENERATOR = Generator("seashell", "a parametric gastropod shell or a ribbed scallop (PLY)",
+                      SeashellParams, write, __doc__)

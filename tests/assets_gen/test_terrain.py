@@ -1,4 +1,5 @@
-"""Terrain generators: dunes, ripples, grains, maps. Small sizes so the file runs in well under a minute."""
+"""Terrain generators (assets_gen/terrain) and maps (assets_gen/maps): dunes, ripples, grains,
+lens and shell maps. Small sizes so the file runs in well under a minute."""
 from __future__ import annotations
 
 import hashlib
@@ -12,8 +13,11 @@ from scipy import stats
 from scipy.spatial import cKDTree
 
 from assets_gen.cli import main
-from assets_gen.camera import PinholeCamera
-from assets_gen.grains import GrainParams, scene_camera
+from assets_gen.core import GeneratorError
+from assets_gen.core.camera import PinholeCamera
+from assets_gen.core.meshing import grid_faces
+from assets_gen.terrain.heightfield import heightfield_faces, triangle_slopes
+from assets_gen.terrain.grains import GrainParams, scene_camera
 from renderer.io.images import read_exr
 
 DUNES = ["--size-x", "8", "--size-z", "6", "--spacing", "0.05", "--dune-height", "0.6",
@@ -135,6 +139,32 @@ def test_pinhole_camera_matches_pbrt_look_at():
     assert np.allclose(xy[0], [100, 50]) and z[0] == pytest.approx(5.0)
     assert xy[1, 1] < 50                            # up in the world is up in the image (raster y down)
     assert cam.max_depth_for_coverage(1e-3, 1.0) * cam.pixel_pitch == pytest.approx(1e-3 / np.sqrt(4 / np.pi))
+
+
+@pytest.mark.parametrize("position, target, up, message", [
+    ((0, 1, 0), (0, 1, 0), (0, 1, 0), "coincide"),
+    ((0, 1, 0), (0, 2, 0), (0, 1, 0), "parallel"),
+])
+def test_degenerate_camera_is_a_parameter_error(position, target, up, message):
+    with pytest.raises(GeneratorError, match=message):
+        PinholeCamera.from_look_at(position, target, up, 40.0, 64, 64)
+
+
+def test_heightfield_triangles_are_the_mesh_grid_in_slope_order():
+    """The terrain's triangles are meshing's grid triangles, wound to +y, in the order whose
+    slopes :func:`triangle_slopes` returns (first the triangle on the +x side of each diagonal)."""
+    nz, nx = 4, 5
+    faces = heightfield_faces(nz, nx)
+    assert sorted(map(tuple, faces)) == sorted(map(tuple, grid_faces(nz, nx)))
+    rng = np.random.default_rng(0)
+    y = rng.normal(size=(nz, nx))
+    xx, zz = np.meshgrid(np.arange(nx) * 0.5, np.arange(nz) * 0.25)
+    verts = np.stack([xx.ravel(), y.ravel(), zz.ravel()], 1)
+    a, b, c = (verts[faces[:, k]] for k in range(3))
+    n = np.cross(b - a, c - a)
+    assert np.all(n[:, 1] > 0)                                     # counter-clockwise seen from +y
+    gx, gz = triangle_slopes(y, 0.5, 0.25)
+    assert np.allclose(-n[:, 0] / n[:, 1], gx.ravel()) and np.allclose(-n[:, 2] / n[:, 1], gz.ravel())
 
 
 def test_camera_from_a_scene_file_matches_the_parameters(tmp_path):

@@ -1,4 +1,4 @@
-"""Mesh pieces the prop generators share: quad grids from swept profiles, tubes along curves,
+"""Mesh pieces the generators share: quad grids from swept profiles, tubes along curves,
 discs, solids made from an open surface plus an inner surface and rims, and smooth normals.
 
 Conventions: a grid is ``points[i, j]`` with ``i`` along the sweep (UV ``u``) and ``j`` around the
@@ -9,10 +9,11 @@ positions still coincide, so welding by position gives a watertight surface.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-from assets_gen.common import write_ply
+from assets_gen.core.output import write_ply
 
 
 @dataclass(frozen=True)
@@ -56,7 +57,7 @@ class Mesh:
         a, b, c = (self.vertices[self.faces[:, k]] for k in range(3))
         return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
 
-    def write(self, path) -> None:
+    def write(self, path: str | Path) -> None:
         write_ply(path, self.vertices, self.faces, self.normals, np.clip(self.uvs, 0.0, 1.0))
 
 

@@ -7,23 +7,22 @@ otherwise they are written as a displacement map (EXR, metres) over the dune's U
 """
 from __future__ import annotations
 
-import argparse
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from scipy import ndimage
 
-from assets_gen.common import require
-from assets_gen.dunes import Heightfield, read_heightfield, talus_relax, write_heightfield
-from assets_gen.maps import add_generator_parser, emit, param, params_from_args, smooth_noise, write_map
+from assets_gen.core import Generator, Job, Params, param, require
+from assets_gen.core.noise import smooth_noise
+from assets_gen.core.output import write_map
+from assets_gen.terrain.heightfield import Heightfield, read_heightfield, talus_relax, write_heightfield
 
 
 @dataclass(frozen=True)
-class RippleParams:
-    dunes: str = param("assets/dunes/dunes_height.exr", "dune heightfield written by `dunes`", type=str)
+class RippleParams(Params):
+    dunes: str = param("assets/dunes/dunes_height.exr", "dune heightfield written by `dunes`", path=True)
     wavelength: float = param(0.12, "crest-to-crest distance, m")
     height: float = param(0.005, "trough-to-crest height, m")
     lee_fraction: float = param(0.3, "fraction of a wavelength taken by the steep lee side")
@@ -132,20 +131,15 @@ def ripple_map(field: Heightfield, p: RippleParams, seed: int) -> np.ndarray:
     return ripple_displacement(field, p, seed, x, z)
 
 
-def _run(args: argparse.Namespace) -> list[str]:
-    p = params_from_args(args, RippleParams)
-
-    def build(stage: Path) -> list[str]:
-        field = read_heightfield(p.dunes)
-        if resolves_ripples(field, p):
-            return write_heightfield(stage, "dunes_rippled", rippled_heightfield(field, p, args.seed),
-                                     args.preview)
-        return write_map(stage, "ripples_displacement", ripple_map(field, p, args.seed), "m",
-                         args.preview, {"x0": float(field.x[0]), "x1": float(field.x[-1]),
-                                        "z0": float(field.z[0]), "z1": float(field.z[-1])})
-
-    return emit(args.out, "ripples", p, args.seed, build)
+def write(job: Job) -> list[str]:
+    """The rippled dunes as geometry where the grid resolves the ripples, else a displacement map."""
+    p, field = job.params, read_heightfield(job.params.dunes)
+    if resolves_ripples(field, p):
+        return write_heightfield(job.stage, "dunes_rippled", rippled_heightfield(field, p, job.seed), job.preview)
+    return write_map(job.stage, "ripples_displacement", ripple_map(field, p, job.seed), "m", job.preview,
+                     {"x0": float(field.x[0]), "x1": float(field.x[-1]),
+                      "z0": float(field.z[0]), "z1": float(field.z[-1])})
 
 
-def register(subparsers: Any) -> None:
-    add_generator_parser(subparsers, "ripples", __doc__, RippleParams, _run)
+GENERATOR = Generator("ripples", "aeolian ripples on the dunes, as geometry or a displacement map",
+                      RippleParams, write, __doc__, previews=True)

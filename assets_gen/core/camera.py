@@ -9,21 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from assets_gen.common import GeneratorError, require
-
-
-def look_at(position: np.ndarray, target: np.ndarray, up: np.ndarray) -> np.ndarray:
-    """Camera-to-world matrix of pbrt's ``LookAt``: +z towards the target, x = up x dir."""
-    position, target, up = (np.asarray(v, dtype=np.float64) for v in (position, target, up))
-    forward = target - position
-    require(np.linalg.norm(forward) > 0, "camera position and look-at point coincide")
-    forward /= np.linalg.norm(forward)
-    right = np.cross(up / max(np.linalg.norm(up), 1e-300), forward)
-    require(np.linalg.norm(right) > 1e-9, "camera up vector is parallel to the viewing direction")
-    right /= np.linalg.norm(right)
-    m = np.eye(4)
-    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = right, np.cross(forward, right), forward, position
-    return m
+from assets_gen.core.params import GeneratorError, require
 
 
 @dataclass(frozen=True)
@@ -40,17 +26,20 @@ class PinholeCamera:
     @classmethod
     def from_look_at(cls, position: tuple[float, float, float], target: tuple[float, float, float],
                      up: tuple[float, float, float], fov_deg: float, width: int, height: int) -> PinholeCamera:
-        return cls(look_at(np.array(position), np.array(target), np.array(up)), fov_deg, width, height)
+        from renderer.scene.transform import world_from_camera
+
+        try:
+            camera_to_world = world_from_camera(position, target, up)
+        except ValueError as e:
+            raise GeneratorError(f"camera: {e}") from None
+        return cls(camera_to_world, fov_deg, width, height)
 
     @classmethod
     def from_scene(cls, path: str | Path) -> PinholeCamera:
         """The camera and film of a pbrt-v4 scene file, through the renderer's own parser."""
         require(Path(path).is_file(), f"scene file {str(path)!r} not found")
-        try:
-            from renderer.scene import load_description
-        except ImportError:
-            raise GeneratorError("this renderer has no scene parser (renderer.scene.load_description) yet; "
-                                 "give the camera as parameters") from None
+        from renderer.scene import load_description
+
         desc = load_description(path)
         return cls(np.asarray(desc.camera.camera_to_world, dtype=np.float64), float(desc.camera.fov_deg),
                    int(desc.film.width), int(desc.film.height))

@@ -10,21 +10,20 @@ until it fits, so the placed diameters follow the lognormal exactly.
 """
 from __future__ import annotations
 
-import argparse
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from assets_gen.camera import PinholeCamera
-from assets_gen.common import GeneratorError, require, write_ply
-from assets_gen.maps import add_generator_parser, emit, param, params_from_args
+from assets_gen.core import Generator, GeneratorError, Job, Params, param, require
+from assets_gen.core.camera import PinholeCamera
+from assets_gen.core.output import write_ply
 
 
 @dataclass(frozen=True)
-class GrainParams:
-    surface: str = param("assets/dunes/dunes.ply", "surface mesh to scatter on (PLY, +y up, m)", type=str)
+class GrainParams(Params):
+    surface: str = param("assets/dunes/dunes.ply", "surface mesh to scatter on (PLY, +y up, m)", path=True)
     count: int = param(100_000, "number of grains")
     median_diameter_mm: float = param(0.35, "median grain diameter, mm")
     sigma_ln: float = param(0.25, "standard deviation of ln(diameter) (sorting)")
@@ -36,7 +35,7 @@ class GrainParams:
     subdivisions: int = param(2, "icosphere subdivisions of the grain shapes")
     max_rounds: int = param(200, "placement rounds before giving up on grains that do not fit")
     scene: str = param("", "pbrt-v4 scene file to take the camera from (overrides the camera options)",
-                       type=str)
+                       path=True)
     camera_position: tuple[float, float, float] = param((0.0, 0.3, -0.6),
                                                         "camera position, m; y is height above the sand")
     camera_look_at: tuple[float, float, float] = param((0.0, 0.0, 0.3),
@@ -273,16 +272,10 @@ def generate(p: GrainParams, seed: int) -> tuple[Grains, list[tuple[np.ndarray, 
     return scatter_grains(vertices, faces, cam, p, rng), shapes, cam
 
 
-def _run(args: argparse.Namespace) -> list[str]:
-    p = params_from_args(args, GrainParams)
-
-    def build(stage: Path) -> list[str]:
-        grains, shapes, cam = generate(p, args.seed)
-        return write_grains(stage, grains, shapes, cam, args.preview)
-
-    return emit(args.out, "grains", p, args.seed, build)
+def write(job: Job) -> list[str]:
+    grains, shapes, cam = generate(job.params, job.seed)
+    return write_grains(job.stage, grains, shapes, cam, job.preview)
 
 
-def register(subparsers: Any) -> None:
-    add_generator_parser(subparsers, "grains", __doc__, GrainParams, _run)
-
+GENERATOR = Generator("grains", "sand grains where the camera resolves them: two shapes and their instances",
+                      GrainParams, write, __doc__, previews=True)

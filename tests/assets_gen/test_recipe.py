@@ -1,7 +1,9 @@
-"""Asset recipes (assets_gen/recipe.py): incremental, deterministic builds and clear errors."""
+"""Asset recipes (assets_gen/recipe.py): incremental, deterministic builds, clear errors, and a
+rebuild hash that follows the generator's imports."""
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import pytest
@@ -105,14 +107,31 @@ def test_scene_recipe_lookup(tmp_path):
     ({"name": "x", "generator": "sky", "out": "../elsewhere"}, "inside assets/"),
     ({"name": "x", "generator": "sky", "out": "assets/x", "params": {"resolution": -4}}, "resolution"),
     ({"name": "x", "generator": "sky", "out": "assets/x", "params": {"no_such_option": 1}},
-     "unrecognized arguments: --no-such-option"),
-    ({"name": "x", "generator": "sky", "out": "assets/x", "params": {"layout": "cube"}}, "invalid choice"),
+     "asset 0 'x': unknown parameter(s) ['no_such_option']"),
+    ({"name": "x", "generator": "sky", "out": "assets/x", "params": {"no-such-option": 1}},
+     "asset 0 'x': unknown parameter(s) ['no_such_option']"),
+    ({"name": "x", "generator": "sky", "out": "assets/x", "params": {"layout": "cube"}},
+     "parameter 'layout': 'cube' is not one of ['both', 'latlong', 'equal-area']"),
+    ({"name": "x", "generator": "sky", "out": "assets/x", "params": {"resolution": "big"}},
+     "asset 0 'x': parameter 'resolution': expected an integer, got 'big'"),
+    ({"name": "x", "generator": "sky", "out": "assets/x", "params": {"resolution": 16.5}},
+     "parameter 'resolution': expected an integer"),
+    ({"name": "x", "generator": "sky", "out": "assets/x", "params": {"turbidity": True}},
+     "parameter 'turbidity': expected a number"),
+    ({"name": "x", "generator": "grains", "out": "assets/x", "params": {"camera_up": [0, 1]}},
+     "parameter 'camera_up': expected a list of 3 numbers"),
+    ({"name": "x", "generator": "sky", "out": "assets/x", "params": {"preview": False}},
+     "unknown parameter(s) ['preview']"),                # the sky writes no previews
+    ({"name": "x", "generator": "dunes", "out": "assets/x", "params": {"preview": "no"}},
+     "parameter 'preview': expected true or false"),
     ({"name": "x", "generator": "sky", "out": "assets/x", "seed": -1}, '"seed"'),
     ({"name": "x", "generator": "sky", "out": "assets/x", "params": {"seed": 2}}, 'give "seed" as a key'),
     ({"name": "x", "generator": "sky", "out": "assets/x", "colour": 1}, "unknown key(s) ['colour']"),
     ({"generator": "sky", "out": "assets/x"}, '"name" must be a non-empty string'),
     ({"name": "x", "generator": "sky-lights", "out": "assets/x", "params": {"sky": "assets/none"}},
      "sky.json not found"),
+    ({"name": "x", "generator": "sky-lights", "out": "assets/x", "params": {"sky": "assets/none", "colour": 1}},
+     "asset 0 'x': unknown parameter(s) ['colour']"),
 ])
 def test_bad_entry_gives_a_clear_error(tmp_path, entry, message):
     r = _recipe(tmp_path, [entry])
@@ -149,24 +168,80 @@ def test_cli_subcommand(tmp_path, capsys):
     assert "unknown generator 'nosuch'" in capsys.readouterr().err
 
 
-def test_scene_inputs_include_their_includes(tmp_path):
-    """An entry that names a .pbrt file depends on the files it includes (e.g. grains on the camera)."""
+def test_scene_inputs_include_their_includes(tmp_path, monkeypatch):
+    """An entry whose path parameter names a .pbrt file depends on the files it includes (e.g.
+    grains on the camera), resolved against the recipe's folder, not the working folder."""
     (tmp_path / "cam.pbrt").write_text('LookAt 0 1 0  0 0 1  0 1 0\n')
     (tmp_path / "view.pbrt").write_text('Include "cam.pbrt"\nWorldBegin\n')
-    entry = {"name": "s", "generator": "sky", "out": "assets/s",
-             "params": {"resolution": 8, "layout": "latlong", "ground_albedo": 0.1}}
-    r = _recipe(tmp_path, [entry])
+    (tmp_path / "sand.ply").write_text("not read: only hashed\n")
+    r = _recipe(tmp_path, [{"name": "g", "generator": "grains", "out": "assets/g",
+                            "params": {"surface": "sand.ply", "scene": "view.pbrt"}}])
     e = recipe.load(r)[0]
-    e.params["unused_file"] = "view.pbrt"      # not passed to a generator: just hashed
-    import os
-    cwd = os.getcwd()
-    os.chdir(tmp_path)
-    try:
-        before = recipe.entry_hash(e)
-        (tmp_path / "cam.pbrt").write_text('LookAt 0 2 0  0 0 1  0 1 0\n')
-        assert recipe.entry_hash(e) != before
-    finally:
-        os.chdir(cwd)
+    monkeypatch.chdir(tmp_path.parent)
+    before = recipe.entry_hash(e, tmp_path)
+    assert recipe.entry_hash(e, tmp_path) == before
+    (tmp_path / "cam.pbrt").write_text('LookAt 0 2 0  0 0 1  0 1 0\n')
+    assert recipe.entry_hash(e, tmp_path) != before
+
+
+def _entry(tmp: Path, generator: str, params: dict) -> recipe.Entry:
+    return recipe.load(_recipe(tmp, [{"name": "e", "generator": generator, "out": "assets/e",
+                                      "params": params}], f"{generator}.recipe.json"))[0]
+
+
+def test_hash_covers_transitively_imported_sources(tmp_path, monkeypatch):
+    """Editing a module the generator only reaches through another (here the renderer's vecmath,
+    which the sky reaches through the renderer's equal-area map, and the meshing helpers, which
+    the seashell imports and the sky does not) changes exactly the hashes of the entries using it."""
+    sky = _entry(tmp_path, "sky", {"resolution": 8})
+    shell = _entry(tmp_path, "seashell", {"per_turn": 8})
+    copies = {}
+    for name in ("renderer.vecmath", "assets_gen.core.meshing"):
+        copies[name] = tmp_path / f"{name}.py"
+        shutil.copy(recipe._module_file(name), copies[name])
+    real = recipe._module_file
+    monkeypatch.setattr(recipe, "_module_file", lambda name: copies.get(name) or real(name))
+    assert {"renderer.vecmath", "renderer.sampling.equal_area"} <= set(recipe.module_sources("assets_gen.sky"))
+    assert "assets_gen.core.meshing" not in recipe.module_sources("assets_gen.sky")
+    assert "renderer.vecmath" not in recipe.module_sources("assets_gen.props.seashell")
+    sky0, shell0 = recipe.entry_hash(sky, tmp_path), recipe.entry_hash(shell, tmp_path)
+
+    copies["renderer.vecmath"].write_text(copies["renderer.vecmath"].read_text() + "\n# edited\n")
+    assert recipe.entry_hash(sky, tmp_path) != sky0
+    assert recipe.entry_hash(shell, tmp_path) == shell0
+    sky1 = recipe.entry_hash(sky, tmp_path)
+
+    copies["assets_gen.core.meshing"].write_text(copies["assets_gen.core.meshing"].read_text() + "\n# edited\n")
+    assert recipe.entry_hash(shell, tmp_path) != shell0
+    assert recipe.entry_hash(sky, tmp_path) == sky1
+
+
+def test_builds_from_any_working_folder_without_changing_it(tmp_path, monkeypatch):
+    """Relative paths resolve against the recipe's folder explicitly: building from elsewhere
+    writes nothing there and leaves the working folder where it was."""
+    (tmp_path / "scene").mkdir()
+    r = _recipe(tmp_path / "scene", _small())
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    chdirs = []
+    monkeypatch.setattr("os.chdir", lambda p: chdirs.append(p))
+    assert all(x.built for x in recipe.build(r, log=None))
+    assert chdirs == [] and not any(elsewhere.iterdir())
+    lights = (tmp_path / "scene/assets/t/lights/lights.pbrt").read_text()
+    assert '"string filename" ["../sky/sky_latlong.exr"]' in lights
+    assert "from assets/t/sky/sky.json:" in lights               # as the recipe names it
+
+
+def test_json_numbers_become_the_fields_types(tmp_path):
+    """An integer given for a float parameter is recorded as a float, as the CLI would parse it,
+    so the same recipe makes the same manifest whichever spelling it uses."""
+    r = _recipe(tmp_path, [{"name": "u", "generator": "umbrella", "out": "assets/u", "params": {"tilt_deg": 8}},
+                           {"name": "v", "generator": "umbrella", "out": "assets/v", "params": {"tilt_deg": 8.0}}])
+    recipe.build(r, log=None)
+    u, v = ((tmp_path / f"assets/{n}/umbrella.json").read_text() for n in "uv")
+    assert u == v and '"tilt_deg": 8.0' in u
+    assert (tmp_path / "assets/u/canopy.ply").read_bytes() == (tmp_path / "assets/v/canopy.ply").read_bytes()
 
 
 def test_generator_reading_a_bad_scene_names_the_entry(tmp_path):

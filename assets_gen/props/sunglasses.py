@@ -13,16 +13,47 @@ run back along −z. The wearer's left lens is on +x.
 """
 from __future__ import annotations
 
-import argparse
-from pathlib import Path
-from typing import Any
+from dataclasses import dataclass
 
 import numpy as np
 
-from assets_gen.common import require, staged_output, write_manifest
-from assets_gen.meshing import Mesh, closed_solid, disc, rotation, tube
+from assets_gen.core import Generator, Job, Params, param, require
+from assets_gen.core.meshing import Mesh, closed_solid, disc, rotation, tube
 
 MIRROR_X = np.diag([-1.0, 1.0, 1.0])
+
+
+@dataclass(frozen=True)
+class SunglassesParams(Params):
+    lens_width: float = param(0.055, "lens outline width, m")
+    lens_height: float = param(0.045, "lens outline height, m")
+    squareness: float = param(3.0, "superellipse exponent of the lens outline")
+    base_curve: float = param(6.0, "base curve, dioptres (front radius 530 mm / base)")
+    bridge: float = param(0.018, "gap between the lenses, m")
+    temple: float = param(0.140, "temple length, m")
+    wrap_deg: float = param(6.0, "wrap of each lens about the vertical, degrees")
+    tilt_deg: float = param(8.0, "pantoscopic tilt, degrees")
+    lens_thickness: float = param(0.002, "lens thickness, m")
+    wire: float = param(0.0022, "frame wire radius, m")
+
+    @property
+    def front_radius(self) -> float:
+        """The lens front's sphere radius, m."""
+        return 0.53 / self.base_curve
+
+    def validate(self) -> None:
+        require(0.02 <= self.lens_width <= 0.09 and 0.015 <= self.lens_height <= 0.08,
+                "lens width must be 0.02..0.09 m and height 0.015..0.08 m")
+        require(1.5 <= self.squareness <= 12,
+                f"squareness (superellipse exponent) must be 1.5..12, got {self.squareness}")
+        require(1 <= self.base_curve <= 10, f"base curve must be 1..10 dioptres, got {self.base_curve}")
+        require(self.front_radius > 0.55 * np.hypot(self.lens_width, self.lens_height),
+                "base curve too steep for the lens size: the lens would not fit on its sphere")
+        require(0.008 <= self.bridge <= 0.03 and 0.08 <= self.temple <= 0.18,
+                "bridge must be 8..30 mm, temple 80..180 mm")
+        require(0 <= self.wrap_deg <= 25 and -5 <= self.tilt_deg <= 20, "wrap must be 0..25 deg, tilt -5..20 deg")
+        require(0.0005 <= self.lens_thickness <= 0.005, "lens thickness must be 0.5..5 mm")
+        require(0.0005 <= self.wire <= 0.005, "wire (rim, bridge and temple radius) must be 0.5..5 mm")
 
 
 def superellipse(a: float, b: float, n: float, t: np.ndarray) -> np.ndarray:
@@ -55,17 +86,15 @@ def lens_mesh(a: float, b: float, n: float, radius: float, thickness: float,
     return lens, mid
 
 
-def sunglasses(lens_width: float, lens_height: float, squareness: float, base_curve: float,
-               bridge: float, temple: float, wrap_deg: float, tilt_deg: float, lens_thickness: float,
-               wire: float, rng: np.random.Generator) -> tuple[Mesh, Mesh, Mesh]:
+def sunglasses(p: SunglassesParams, rng: np.random.Generator) -> tuple[Mesh, Mesh, Mesh]:
     """(left lens, right lens, frame) in metres. The seed only nudges the temples' splay and droop."""
-    a, b = lens_width / 2, lens_height / 2
-    radius = 0.530 / base_curve
-    lens, outline = lens_mesh(a, b, squareness, radius, lens_thickness)
+    a, b = p.lens_width / 2, p.lens_height / 2
+    bridge, temple, wire = p.bridge, p.temple, p.wire
+    lens, outline = lens_mesh(a, b, p.squareness, p.front_radius, p.lens_thickness)
     rim = tube(outline, wire, sides=10, closed=True)
     # lens frame -> worn: pantoscopic tilt (bottom towards the face), wrap (temple edge back),
     # then out to the left of the bridge
-    pose = rotation([0, 1, 0], np.radians(wrap_deg)) @ rotation([1, 0, 0], np.radians(tilt_deg))
+    pose = rotation([0, 1, 0], np.radians(p.wrap_deg)) @ rotation([1, 0, 0], np.radians(p.tilt_deg))
     shift = np.array([bridge / 2 + a, 0.0, 0.0])
     left_lens, left_rim = (m.transformed(pose, shift) for m in (lens, rim))
     place = lambda p: p @ pose.T + shift                          # noqa: E731 (a point map)
@@ -90,46 +119,14 @@ def sunglasses(lens_width: float, lens_height: float, squareness: float, base_cu
     return left_lens, right_lens, Mesh.join([left_frame, right_frame, bridge_mesh])
 
 
-def generate(out_dir: str | Path, lens_width: float = 0.055, lens_height: float = 0.045,
-             squareness: float = 3.0, base_curve: float = 6.0, bridge: float = 0.018, temple: float = 0.140,
-             wrap_deg: float = 6.0, tilt_deg: float = 8.0, lens_thickness: float = 0.002,
-             wire: float = 0.0022, seed: int = 0) -> list[str]:
-    """Write ``lens_left.ply``, ``lens_right.ply``, ``frame.ply`` and ``sunglasses.json``."""
-    params = dict(lens_width=lens_width, lens_height=lens_height, squareness=squareness,
-                  base_curve=base_curve, bridge=bridge, temple=temple, wrap_deg=wrap_deg,
-                  tilt_deg=tilt_deg, lens_thickness=lens_thickness, wire=wire)
-    require(0.02 <= lens_width <= 0.09 and 0.015 <= lens_height <= 0.08,
-            "lens width must be 0.02..0.09 m and height 0.015..0.08 m")
-    require(1.5 <= squareness <= 12, f"squareness (superellipse exponent) must be 1.5..12, got {squareness}")
-    require(1 <= base_curve <= 10, f"base curve must be 1..10 dioptres, got {base_curve}")
-    require(0.53 / base_curve > 0.55 * np.hypot(lens_width, lens_height),
-            "base curve too steep for the lens size: the lens would not fit on its sphere")
-    require(0.008 <= bridge <= 0.03 and 0.08 <= temple <= 0.18, "bridge must be 8..30 mm, temple 80..180 mm")
-    require(0 <= wrap_deg <= 25 and -5 <= tilt_deg <= 20, "wrap must be 0..25 deg, tilt -5..20 deg")
-    require(0.0005 <= lens_thickness <= 0.005, "lens thickness must be 0.5..5 mm")
-    require(0.0005 <= wire <= 0.005, "wire (rim, bridge and temple radius) must be 0.5..5 mm")
-    meshes = sunglasses(lens_width, lens_height, squareness, base_curve, bridge, temple, wrap_deg,
-                        tilt_deg, lens_thickness, wire, np.random.default_rng(seed))
+def write(job: Job) -> list[str]:
+    """The two lenses and the frame; the manifest also records the front radius."""
+    job.note(front_radius_m=job.params.front_radius)
     names = ["lens_left.ply", "lens_right.ply", "frame.ply"]
-    with staged_output(out_dir) as stage:
-        for m, name in zip(meshes, names):
-            m.write(stage / name)
-        write_manifest(stage / "sunglasses.json", "sunglasses",
-                       {**params, "front_radius_m": 0.53 / base_curve}, seed, names)
-    return [str(Path(out_dir) / n) for n in (*names, "sunglasses.json")]
+    for mesh, name in zip(sunglasses(job.params, np.random.default_rng(job.seed)), names):
+        mesh.write(job.stage / name)
+    return names
 
 
-def register(subparsers: Any) -> None:
-    p = subparsers.add_parser("sunglasses", help="superellipse lenses on a base-curve sphere, rims, bridge, temples",
-                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    for flag, default, unit in (("--lens-width", 0.055, "m"), ("--lens-height", 0.045, "m"),
-                                ("--squareness", 3.0, "superellipse exponent"), ("--base-curve", 6.0, "D"),
-                                ("--bridge", 0.018, "m"), ("--temple", 0.140, "m"), ("--wrap-deg", 6.0, "deg"),
-                                ("--tilt-deg", 8.0, "deg, pantoscopic"), ("--lens-thickness", 0.002, "m"),
-                                ("--wire", 0.0022, "m, frame wire radius")):
-        p.add_argument(flag, type=float, default=default, help=f"{unit} (default {default})")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--out", type=Path, default=Path("assets") / "sunglasses", help="output folder")
-    p.set_defaults(run=lambda a: generate(a.out, a.lens_width, a.lens_height, a.squareness, a.base_curve,
-                                          a.bridge, a.temple, a.wrap_deg, a.tilt_deg, a.lens_thickness,
-                                          a.wire, a.seed))
+GENERATOR = Generator("sunglasses", "superellipse lenses on a base-curve sphere, rims, bridge, temples",
+                      SunglassesParams, write, __doc__)

@@ -16,17 +16,36 @@ Outputs per tree i: ``palm<i>_trunk.ply``, ``palm<i>_fronds.ply``, ``palm<i>_coc
 """
 from __future__ import annotations
 
-import argparse
-from pathlib import Path
-from typing import Any
+from dataclasses import dataclass
 
 import numpy as np
 
-from assets_gen.common import require, staged_output, write_manifest
-from assets_gen.meshing import Mesh, ellipsoid, grid_faces, rotation, tube
+from assets_gen.core import Generator, Job, Params, param, require
+from assets_gen.core.meshing import Mesh, ellipsoid, grid_faces, rotation, tube
 
 GOLDEN_ANGLE = np.pi * (3.0 - np.sqrt(5.0))
 UP = np.array([0.0, 1.0, 0.0])
+
+
+@dataclass(frozen=True)
+class PalmParams(Params):
+    height: float = param(7.0, "trunk length, m")
+    lean_deg: float = param(12.0, "lean at the foot, degrees")
+    fronds: int = param(14, "fronds per crown")
+    frond_length: float = param(3.2, "frond length, m")
+    leaflets: int = param(50, "leaflets per side of a frond")
+    coconuts: int = param(5, "coconuts per tree")
+    count: int = param(1, "trees, each with its own variation")
+    embed: float = param(0.3, "trunk below the ground, m")
+
+    def validate(self) -> None:
+        require(2.0 <= self.height <= 30.0, f"height must be 2..30 m, got {self.height}")
+        require(0.0 <= self.lean_deg <= 40.0, f"lean must be 0..40 deg, got {self.lean_deg}")
+        require(3 <= self.fronds <= 40 and 10 <= self.leaflets <= 150,
+                "fronds must be 3..40 and leaflets 10..150 per side")
+        require(0.5 <= self.frond_length <= 7.0, f"frond length must be 0.5..7 m, got {self.frond_length}")
+        require(0 <= self.coconuts <= 30 and 1 <= self.count <= 20, "coconuts must be 0..30 and count 1..20")
+        require(0.0 <= self.embed <= 2.0, f"embed must be 0..2 m, got {self.embed}")
 
 
 def integrate(directions: np.ndarray, length: float) -> np.ndarray:
@@ -107,22 +126,22 @@ def frond(base: np.ndarray, azimuth: float, elevation: float, droop: float, leng
     return rachis, np.concatenate(verts), np.concatenate(faces), np.concatenate(uvs)
 
 
-def palm(height: float, lean_deg: float, fronds: int, frond_length: float, leaflets: int, coconuts: int,
-         embed: float, rng: np.random.Generator) -> tuple[Mesh, Mesh, Mesh | None]:
+def palm(p: PalmParams, rng: np.random.Generator) -> tuple[Mesh, Mesh, Mesh | None]:
     """(trunk, fronds, coconuts or None) for one tree, in metres."""
-    height = height * rng.uniform(0.9, 1.1)
-    lean = np.radians(lean_deg) * rng.uniform(0.8, 1.2)
+    fronds, coconuts = p.fronds, p.coconuts
+    height = p.height * rng.uniform(0.9, 1.1)
+    lean = np.radians(p.lean_deg) * rng.uniform(0.8, 1.2)
     heading = rng.uniform(0.0, 2 * np.pi)
     stem, crown, axis = trunk(height, lean, heading, 0.2 * height / 7 + 0.08, 0.13 * height / 7 + 0.05,
-                              0.12, embed, rng)
+                              0.12, p.embed, rng)
     rachises, leaf_parts = [], []
     phase = rng.uniform(0.0, 2 * np.pi)
     for i in range(fronds):
         age = i / max(fronds - 1, 1)                                 # 0 = young, upright, inner
         elevation = np.radians(65.0 - 75.0 * age + rng.normal(0, 5))
         droop = np.radians(50.0 + 40.0 * age + rng.normal(0, 8))
-        length = frond_length * (0.75 + 0.35 * age) * rng.uniform(0.9, 1.1)
-        r, *raw = frond(crown + 0.1 * axis, phase + i * GOLDEN_ANGLE, elevation, droop, length, leaflets, rng)
+        length = p.frond_length * (0.75 + 0.35 * age) * rng.uniform(0.9, 1.1)
+        r, *raw = frond(crown + 0.1 * axis, phase + i * GOLDEN_ANGLE, elevation, droop, length, p.leaflets, rng)
         rachises.append(r)
         leaf_parts.append(raw)
     offsets = np.cumsum([0] + [len(p[0]) for p in leaf_parts])
@@ -142,42 +161,17 @@ def palm(height: float, lean_deg: float, fronds: int, frond_length: float, leafl
     return stem, Mesh.join([*rachises, leaves]), nuts
 
 
-def generate(out_dir: str | Path, height: float = 7.0, lean_deg: float = 12.0, fronds: int = 14,
-             frond_length: float = 3.2, leaflets: int = 50, coconuts: int = 5, count: int = 1,
-             embed: float = 0.3, seed: int = 0) -> list[str]:
-    """Write ``count`` trees (``palm<i>_*.ply``) and ``palm.json``."""
-    params = dict(height=height, lean_deg=lean_deg, fronds=fronds, frond_length=frond_length,
-                  leaflets=leaflets, coconuts=coconuts, count=count, embed=embed)
-    require(2.0 <= height <= 30.0, f"height must be 2..30 m, got {height}")
-    require(0.0 <= lean_deg <= 40.0, f"lean must be 0..40 deg, got {lean_deg}")
-    require(3 <= fronds <= 40 and 10 <= leaflets <= 150, "fronds must be 3..40 and leaflets 10..150 per side")
-    require(0.5 <= frond_length <= 7.0, f"frond length must be 0.5..7 m, got {frond_length}")
-    require(0 <= coconuts <= 30 and 1 <= count <= 20, "coconuts must be 0..30 and count 1..20")
-    require(0.0 <= embed <= 2.0, f"embed must be 0..2 m, got {embed}")
-    rng = np.random.default_rng(seed)
+def write(job: Job) -> list[str]:
+    """``count`` trees, ``palm<i>_{trunk,fronds,coconuts}.ply``, each from its own seed drawn from the job's."""
     names: list[str] = []
-    with staged_output(out_dir) as stage:
-        for i, tree_seed in enumerate(rng.integers(0, 2 ** 63, size=count)):
-            parts = palm(height, lean_deg, fronds, frond_length, leaflets, coconuts, embed,
-                         np.random.default_rng(int(tree_seed)))
-            for part, name in zip(parts, ("trunk", "fronds", "coconuts")):
-                if part is not None:
-                    names.append(f"palm{i}_{name}.ply")
-                    part.write(stage / names[-1])
-        write_manifest(stage / "palm.json", "palm", params, seed, names)
-    return [str(Path(out_dir) / n) for n in (*names, "palm.json")]
+    seeds = np.random.default_rng(job.seed).integers(0, 2 ** 63, size=job.params.count)
+    for i, tree_seed in enumerate(seeds):
+        for part, name in zip(palm(job.params, np.random.default_rng(int(tree_seed))), ("trunk", "fronds", "coconuts")):
+            if part is not None:
+                names.append(f"palm{i}_{name}.ply")
+                part.write(job.stage / names[-1])
+    return names
 
 
-def register(subparsers: Any) -> None:
-    p = subparsers.add_parser("palm", help="coconut palms: curved ringed trunk, drooping fronds, coconuts",
-                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    for flag, kind, default, unit in (
-            ("--height", float, 7.0, "m, trunk length"), ("--lean-deg", float, 12.0, "deg, lean at the foot"),
-            ("--fronds", int, 14, "fronds per crown"), ("--frond-length", float, 3.2, "m"),
-            ("--leaflets", int, 50, "leaflets per side of a frond"), ("--coconuts", int, 5, "per tree"),
-            ("--count", int, 1, "trees, each with its own variation"), ("--embed", float, 0.3, "m below ground")):
-        p.add_argument(flag, type=kind, default=default, help=f"{unit} (default {default})")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--out", type=Path, default=Path("assets") / "palm", help="output folder")
-    p.set_defaults(run=lambda a: generate(a.out, a.height, a.lean_deg, a.fronds, a.frond_length, a.leaflets,
-                                          a.coconuts, a.count, a.embed, a.seed))
+GENERATOR = Generator("palm", "coconut palms: curved ringed trunk, drooping fronds, coconuts",
+                      PalmParams, write, __doc__)

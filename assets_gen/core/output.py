@@ -1,8 +1,10 @@
-"""What every generator shares: parameter errors, staged atomic output, manifests, PLY and map writers."""
+"""Writing outputs reproducibly: a staging folder that only moves into place on success, the JSON
+manifest, binary PLY meshes and scalar maps (EXR with a greyscale PNG preview)."""
 from __future__ import annotations
 
 import contextlib
 import json
+import math
 import shutil
 import tempfile
 from pathlib import Path
@@ -11,16 +13,6 @@ from typing import Any, Iterator
 import numpy as np
 
 from assets_gen import __version__
-
-
-class GeneratorError(ValueError):
-    """A bad generator parameter; the CLI prints it on one line and exits with code 2."""
-
-
-def require(cond: bool, message: str) -> None:
-    """Raise :class:`GeneratorError` with ``message`` unless ``cond`` holds."""
-    if not cond:
-        raise GeneratorError(message)
 
 
 @contextlib.contextmanager
@@ -85,3 +77,29 @@ def write_ply(path: str | Path, vertices: np.ndarray, faces: np.ndarray, normals
     face["vertex_indices"] = f
     PlyData([PlyElement.describe(vert, "vertex"), PlyElement.describe(face, "face")],
             byte_order="<").write(str(path))
+
+
+def write_preview(path: Path, values: np.ndarray, max_side: int = 512) -> None:
+    """An 8-bit greyscale PNG of a map, stretched to its own range and shrunk to ``max_side``:
+    for looking at, not for rendering (the EXR holds the physical values)."""
+    from PIL import Image
+
+    v = np.asarray(values, dtype=np.float64)
+    lo, hi = float(np.nanmin(v)), float(np.nanmax(v))
+    grey = np.zeros_like(v) if hi <= lo else (v - lo) / (hi - lo)
+    step = max(1, int(math.ceil(max(v.shape) / max_side)))
+    img = (np.nan_to_num(grey[::step, ::step]) * 255.0 + 0.5).astype(np.uint8)
+    Image.fromarray(img).save(path, format="PNG", optimize=False)
+
+
+def write_map(stage: Path, name: str, values: np.ndarray, units: str, preview: bool,
+              header: dict[str, object] | None = None) -> list[str]:
+    """``name.exr`` (one float channel ``Y`` in ``units``) and optionally ``name.png``."""
+    from renderer.io.images import write_exr
+
+    write_exr(stage / f"{name}.exr", {"Y": np.asarray(values, dtype=np.float32)},
+              {"units": units, **(header or {})})
+    if not preview:
+        return [f"{name}.exr"]
+    write_preview(stage / f"{name}.png", values)
+    return [f"{name}.exr", f"{name}.png"]

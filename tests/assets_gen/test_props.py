@@ -1,5 +1,6 @@
-"""Prop and sky generators: determinism, mesh validity (closed, outward, no degenerate triangles,
-UVs in [0, 1], real sizes), the sky's sun position, equal-area mapping and daylight level, CLI errors."""
+"""Prop and sky generators (assets_gen/props, assets_gen/sky.py): determinism, mesh validity
+(closed, outward, no degenerate triangles, UVs in [0, 1], real sizes), the sky's sun position,
+equal-area mapping and daylight level, parameter errors."""
 from __future__ import annotations
 
 import json
@@ -9,8 +10,10 @@ import pytest
 import trimesh
 from plyfile import PlyData
 
-from assets_gen import palm, seashell, sky, sunglasses, umbrella
+from assets_gen import sky
 from assets_gen.cli import main
+from assets_gen.core import GeneratorError
+from assets_gen.props import palm, seashell, sunglasses, umbrella
 from renderer.io.images import read_exr
 
 SMALL = {
@@ -20,7 +23,12 @@ SMALL = {
     "palm": dict(fronds=4, leaflets=12, coconuts=2),
     "sky": dict(resolution=32),
 }
-MODULES = {"seashell": seashell, "sunglasses": sunglasses, "umbrella": umbrella, "palm": palm, "sky": sky}
+GENERATORS = {m.GENERATOR.name: m.GENERATOR for m in (seashell, sunglasses, umbrella, palm, sky)}
+
+
+def build(name: str, out, seed: int = 0, **values) -> list[str]:
+    gen = GENERATORS[name]
+    return gen.build(gen.params(**values), seed, out)
 
 
 def load_ply(path):
@@ -55,20 +63,30 @@ def check_mesh(path, closed: bool = True, extent: tuple[float, float] | None = N
     return mesh
 
 
-@pytest.mark.parametrize("name", sorted(MODULES))
+@pytest.mark.parametrize("name", sorted(GENERATORS))
 def test_deterministic_with_manifest(tmp_path, name):
-    a = MODULES[name].generate(tmp_path / "a", seed=7, **SMALL[name])
-    b = MODULES[name].generate(tmp_path / "b", seed=7, **SMALL[name])
+    a = build(name, tmp_path / "a", 7, **SMALL[name])
+    b = build(name, tmp_path / "b", 7, **SMALL[name])
     for pa, pb in zip(a, b):
         assert open(pa, "rb").read() == open(pb, "rb").read(), pa
     manifest = json.loads(open(a[-1]).read())
     assert manifest["generator"] == name and manifest["seed"] == 7
     assert sorted(manifest["outputs"]) == sorted(p.split("/")[-1] for p in a[:-1])
+    assert {k: manifest["params"][k] for k in SMALL[name]} == SMALL[name]
+
+
+def test_manifest_records_derived_facts(tmp_path):
+    """Writers add what they computed (here the lens's front radius, the shell model) to the manifest."""
+    glasses = json.loads(open(build("sunglasses", tmp_path / "g", base_curve=4.0)[-1]).read())
+    assert glasses["params"]["front_radius_m"] == pytest.approx(0.53 / 4.0)
+    assert glasses["params"]["base_curve"] == 4.0
+    shell = json.loads(open(build("seashell", tmp_path / "s", preset="nautilus", **SMALL["seashell"])[-1]).read())
+    assert shell["params"]["model"]["alpha"] == seashell.PRESETS["nautilus"].alpha
 
 
 @pytest.mark.parametrize("preset", [*seashell.PRESETS, seashell.SCALLOP])
 def test_seashell_solid(tmp_path, preset):
-    ply, _ = seashell.generate(tmp_path, preset=preset, length=0.06, per_turn=20, around=16)
+    ply, _ = build("seashell", tmp_path, preset=preset, length=0.06, per_turn=20, around=16)
     mesh = check_mesh(ply, extent=(0.0599, 0.0601))
     assert mesh.bounds[0][1] == pytest.approx(0.0, abs=1e-6)      # rests on the sand
 
@@ -83,7 +101,7 @@ def test_seashell_uv_follows_growth():
 
 
 def test_sunglasses(tmp_path):
-    left, right, frame, _ = sunglasses.generate(tmp_path)
+    left, right, frame, _ = build("sunglasses", tmp_path)
     for lens in (left, right):
         check_mesh(lens, extent=(0.054, 0.056))
         pos, f, _, uv = load_ply(lens)
@@ -105,7 +123,7 @@ def test_lens_on_base_curve_sphere():
 
 
 def test_umbrella(tmp_path):
-    canopy, frame, _ = umbrella.generate(tmp_path, tilt_deg=15.0, segments=6)
+    canopy, frame, _ = build("umbrella", tmp_path, tilt_deg=15.0, segments=6)
     check_mesh(canopy, extent=(1.9, 2.2))
     mesh = check_mesh(frame)
     assert mesh.bounds[0][1] == pytest.approx(-0.35, abs=1e-3)     # pole foot in the sand
@@ -116,7 +134,7 @@ def test_umbrella(tmp_path):
 
 
 def test_palm_trees_differ(tmp_path):
-    paths = palm.generate(tmp_path, count=2, seed=3, **SMALL["palm"])
+    paths = build("palm", tmp_path, 3, count=2, **SMALL["palm"])
     names = [p.split("/")[-1] for p in paths]
     assert names[:-1] == [f"palm{i}_{k}.ply" for i in range(2) for k in ("trunk", "fronds", "coconuts")]
     trunks = [check_mesh(tmp_path / f"palm{i}_trunk.ply", extent=(5.0, 9.5)) for i in range(2)]
@@ -125,23 +143,24 @@ def test_palm_trees_differ(tmp_path):
     assert not np.allclose(trunks[0].bounds, trunks[1].bounds)
 
 
-def test_equal_area_round_trip_and_area():
-    rng = np.random.default_rng(0)
-    d = rng.normal(size=(200_000, 3))
-    d /= np.linalg.norm(d, axis=1, keepdims=True)
-    uv = sky.equal_area_sphere_to_square(d)
-    assert np.allclose(sky.equal_area_square_to_sphere(uv), d, atol=1e-9)
-    # uniform directions land uniformly on the square: every one of 16x16 cells within 5 sigma
-    counts = np.histogram2d(uv[:, 0], uv[:, 1], bins=16, range=[[0, 1], [0, 1]])[0]
-    expect = len(d) / 256
-    assert np.all(np.abs(counts - expect) < 5 * np.sqrt(expect))
-    grid = rng.uniform(size=(1000, 2))
-    assert np.allclose(sky.equal_area_sphere_to_square(sky.equal_area_square_to_sphere(grid)), grid, atol=1e-9)
+def test_equal_area_pixels_are_where_the_renderer_looks_them_up():
+    """The sky's equal-area pixel centres come from the renderer's own map: mapped back they land
+    on the centres of their pixels, and they cover the sphere uniformly (equal solid angles)."""
+    from renderer.sampling.equal_area import sphere_to_square
+
+    n = 64
+    dirs = sky.equal_area_directions(n)
+    assert dirs.dtype == np.float64 and np.allclose(np.linalg.norm(dirs, axis=-1), 1.0, atol=1e-6)
+    c = (np.arange(n) + 0.5) / n
+    assert np.allclose(sphere_to_square(dirs), np.stack(np.meshgrid(c, c, indexing="xy"), -1), atol=1e-6)
+    # equal solid angles: z of uniform directions is uniform on [-1, 1]
+    for z in (-0.5, 0.0, 0.5, 0.9):
+        assert np.mean(dirs[..., 2] > z) == pytest.approx((1 - z) / 2, abs=2.0 / n)
 
 
 @pytest.mark.parametrize("elevation,azimuth", [(20.0, 40.0), (55.0, 250.0)])
 def test_sky_peak_at_sun(tmp_path, elevation, azimuth):
-    sky.generate(tmp_path, elevation_deg=elevation, azimuth_deg=azimuth, turbidity=3.0, resolution=64)
+    build("sky", tmp_path, elevation_deg=elevation, azimuth_deg=azimuth, turbidity=3.0, resolution=64)
     sun = sky.sun_direction(elevation, azimuth)
     manifest = json.loads((tmp_path / "sky.json").read_text())
     assert np.allclose(manifest["params"]["sun"]["direction_light_frame"], sun)
@@ -169,7 +188,7 @@ def test_sky_daylight_levels():
 
 
 def test_sky_below_horizon_is_ground(tmp_path):
-    sky.generate(tmp_path, resolution=16, layout="latlong", ground_albedo=0.3)
+    build("sky", tmp_path, resolution=16, layout="latlong", ground_albedo=0.3)
     ch, _ = read_exr(tmp_path / "sky_latlong.exr")
     assert ch["R"].shape == (16, 32)
     lower = ch["G"][8:]
@@ -187,6 +206,18 @@ def test_sky_below_horizon_is_ground(tmp_path):
 ])
 def test_bad_params_exit_2(tmp_path, argv, capsys):
     out = tmp_path / "out"
-    assert main([*argv, "--out", str(out)]) == 2
+    try:
+        code = main([*argv, "--out", str(out)])
+    except SystemExit as e:                 # argparse's own check (a choice) exits with 2 as well
+        code = e.code
+    assert code == 2
     assert "error" in capsys.readouterr().err
-    assert not out.exists() or not any(out.iterdir())
+    assert not out.exists()
+
+
+def test_bad_params_in_python_raise_and_leave_nothing(tmp_path):
+    with pytest.raises(GeneratorError, match="segments must be 3..24"):
+        build("umbrella", tmp_path / "u", segments=2)
+    with pytest.raises(GeneratorError, match="seed must be a non-negative integer"):
+        build("palm", tmp_path / "p", -1)
+    assert not (tmp_path / "u").exists() and not (tmp_path / "p").exists()

@@ -1,0 +1,2 @@
+"""Prop generators (seashell, sunglasses, umbrella, palm): closed PLY solids with normals and
+UVs, in metres, +y up."""

@@ -1,0 +1,1 @@
+"""Terrain generators (dunes, ripples, grains): metres, +y up, wind along +x."""

@@ -1,0 +1,123 @@
+"""Transverse sand dunes as a displaced, subdivided plane (+y up, metres, wind along +x).
+
+Each dune is asymmetric like a real one: a long stoss side climbing at 10–15° into the wind and a
+short slip face falling at the angle of repose downwind of the crest. Crest lines wander with
+noise and dune heights vary, which steepens some slopes; avalanching (talus relaxation, run to
+convergence) then brings every triangle back to at most the critical slope, conserving sand.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from assets_gen.core import Generator, Job, Params, param, require
+from assets_gen.core.noise import smooth_noise
+from assets_gen.terrain.heightfield import (Heightfield, grid_vertices, heightfield_faces, talus_relax,
+                                            write_heightfield)
+
+
+@dataclass(frozen=True)
+class DuneParams(Params):
+    size_x: float = param(40.0, "extent along the wind (+x), m")
+    size_z: float = param(40.0, "extent across the wind (z), m")
+    spacing: float = param(0.1, "grid spacing of the subdivided plane, m")
+    dune_height: float = param(1.5, "mean crest height above the interdune flats, m")
+    dune_wavelength: float = param(18.0, "crest-to-crest distance along the wind, m")
+    height_variation: float = param(0.3, "relative spread of crest heights")
+    stoss_angle_deg: float = param(12.0, "slope of the windward (stoss) side, degrees")
+    repose_angle_deg: float = param(32.0, "slope of the slip face (angle of repose), degrees")
+    max_slope_deg: float = param(34.0, "critical slope no triangle may exceed after avalanching, degrees")
+    crest_wander: float = param(2.5, "how far crest lines wander along the wind, m")
+    wander_size: float = param(12.0, "feature size of the crest wander and height variation, m")
+    smoothing_steps: int = param(3, "Laplacian smoothing steps that round crests and brinks")
+
+    def validate(self) -> None:
+        require(self.size_x > 0 and self.size_z > 0, "dune field size must be positive (m)")
+        require(self.spacing > 0, "grid spacing must be positive (m)")
+        n = (self.size_x / self.spacing + 1) * (self.size_z / self.spacing + 1)
+        require(n >= 4, "grid spacing is larger than the dune field")
+        require(n <= 2.0e7, f"grid of {n:.3g} vertices is too large; raise --spacing")
+        require(self.dune_height >= 0, "dune height must be non-negative (m)")
+        require(self.dune_wavelength > 0, "dune wavelength must be positive (m)")
+        require(0 <= self.height_variation < 1, "height variation must be in [0, 1)")
+        for name in ("stoss_angle_deg", "repose_angle_deg", "max_slope_deg"):
+            require(0 < getattr(self, name) < 90, f"{name.replace('_', ' ')} must be between 0 and 90 degrees")
+        require(self.stoss_angle_deg < self.repose_angle_deg <= self.max_slope_deg,
+                "need stoss angle < angle of repose <= max slope")
+        require(self.crest_wander >= 0 and self.wander_size > 0, "crest wander >= 0 and wander size > 0 (m)")
+        require(self.smoothing_steps >= 0, "smoothing steps must be non-negative")
+
+
+def dune_profile(x: np.ndarray, z: np.ndarray, p: DuneParams, rng: np.random.Generator) -> np.ndarray:
+    """Unrelaxed dune heights: from each crest the surface falls at the repose slope downwind and
+    at the stoss slope upwind; the higher of the two (and of the flat interdune) wins. Crest lines
+    are level sets of a wind coordinate bent by noise; distances to them are Euclidean and a slip
+    face falls from the height of its nearest crest point, so wandering crests of varying height
+    keep their slip faces at the angle of repose (the gentle stoss takes the local height)."""
+    lo, hi = (float(x.min()), float(z.min())), (float(x.max()), float(z.max()))
+    wander = smooth_noise(rng, lo, hi, p.wander_size)
+    height = smooth_noise(rng, lo, hi, p.wander_size * 1.5)
+    xx, zz = np.meshgrid(x, z)
+    crest_height = p.dune_height * np.clip(1.0 + p.height_variation * height(xx, zz), 0.0, None)
+    s = (xx + p.crest_wander * wander(xx, zz)) / p.dune_wavelength
+    spacing = (float(z[1] - z[0]) if len(z) > 1 else 1.0, float(x[1] - x[0]) if len(x) > 1 else 1.0)
+    (behind, crest_of_slip), (ahead, _) = crest_distances(s, spacing).values()
+    slip = crest_height[crest_of_slip] - behind * math.tan(math.radians(p.repose_angle_deg))
+    stoss = crest_height - ahead * math.tan(math.radians(p.stoss_angle_deg))
+    return np.maximum(np.maximum(slip, stoss), 0.0)
+
+
+def crest_distances(s: np.ndarray, spacing: tuple[float, float]) -> dict[str, tuple[np.ndarray, tuple]]:
+    """For the crest upwind of each grid point (``behind``) and downwind of it (``ahead``): the
+    distance (m, inf where that crest lies off the grid) and the index of its nearest crest point.
+    Crest k is the line s = k of the bent wind coordinate s (in wavelengths)."""
+    from scipy import ndimage
+
+    band = np.floor(s)
+    first = band > ndimage.minimum_filter(band, footprint=ndimage.generate_binary_structure(2, 1),
+                                          mode="nearest")          # just downwind of a crest
+    out = {side: (np.full(s.shape, np.inf), np.indices(s.shape)) for side in ("behind", "ahead")}
+    for k in np.unique(band[first]):
+        dist, idx = ndimage.distance_transform_edt(~(first & (band == k)), sampling=spacing,
+                                                   return_indices=True)
+        for side, members in (("behind", band == k), ("ahead", band == k - 1)):
+            d, nearest = out[side]
+            d[members] = dist[members]
+            nearest[:, members] = idx[:, members]
+    return {side: (d, (nearest[0], nearest[1])) for side, (d, nearest) in out.items()}
+
+
+def laplacian_smooth(field: Heightfield, steps: int) -> Heightfield:
+    """Round crests and brinks with pymeshlab's Laplacian smoothing of the grid mesh. On a regular
+    grid interior vertices keep their (x, z), so this filters heights only."""
+    if steps == 0:
+        return field
+    import pymeshlab
+
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=grid_vertices(field), face_matrix=heightfield_faces(*field.y.shape)))
+    ms.apply_coord_laplacian_smoothing(stepsmoothnum=steps, boundary=True, cotangentweight=False)
+    y = ms.current_mesh().vertex_matrix()[:, 1].reshape(field.y.shape)
+    return Heightfield(field.x, field.z, y)
+
+
+def dune_heightfield(p: DuneParams, seed: int) -> Heightfield:
+    """Dunes for (parameters, seed): profile, smoothing, avalanching."""
+    p.validate()
+    rng = np.random.default_rng(seed)
+    nx = int(round(p.size_x / p.spacing)) + 1
+    nz = int(round(p.size_z / p.spacing)) + 1
+    x = np.linspace(-p.size_x / 2, p.size_x / 2, nx)
+    z = np.linspace(-p.size_z / 2, p.size_z / 2, nz)
+    field = laplacian_smooth(Heightfield(x, z, dune_profile(x, z, p, rng)), p.smoothing_steps)
+    return Heightfield(x, z, talus_relax(field.y, field.dx, field.dz, p.max_slope_deg))
+
+
+def write(job: Job) -> list[str]:
+    return write_heightfield(job.stage, "dunes", dune_heightfield(job.params, job.seed), job.preview)
+
+
+GENERATOR = Generator("dunes", "transverse sand dunes as a displaced, subdivided plane (PLY + height EXR)",
+                      DuneParams, write, __doc__, previews=True)
