@@ -19,10 +19,12 @@ import trimesh
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 os.environ.setdefault("WARP_CACHE_PATH", str(Path(__file__).resolve().parents[1] / ".warp-cache"))
 
-from scenes_py import HERE, look_at, params  # noqa: E402
+from scenes_py import look_at  # noqa: E402
 
-from renderer.scene.description import (CameraDesc, FilmDesc, InfiniteLightDesc, InstanceSetDesc,  # noqa: E402
-                                        MaterialDesc, MeshDesc, SamplerDesc, SceneDescription, ShapeDesc)
+from renderer.lights import light  # noqa: E402
+from renderer.materials import material  # noqa: E402
+from renderer.scene.description import (CameraDesc, FilmDesc, InstanceSetDesc,  # noqa: E402
+                                        MeshDesc, SamplerDesc, SceneDescription, ShapeDesc)
 
 DEPTH = 8
 
@@ -42,18 +44,18 @@ def our_scene(res: int, all_materials: bool) -> SceneDescription:
                             film=FilmDesc(width=res, height=res), sampler=SamplerDesc(spp=16, seed=0))
     desc.integrator.max_depth = DEPTH
     meshes = [sphere, floor]
-    desc.materials.append(MaterialDesc("diffuse", params(reflectance=(0.7, 0.7, 0.7)), HERE))
+    desc.materials.append(material("diffuse", reflectance=(0.7, 0.7, 0.7)))
     if all_materials:
         meshes += [trimesh.creation.icosphere(1, radius=0.01)] * 2
-        desc.materials += [MaterialDesc("dielectric", params(eta=1.5), HERE),
-                           MaterialDesc("conductor", params(roughness=0.2), HERE)]
+        desc.materials += [material("dielectric", eta=1.5),
+                           material("conductor", roughness=0.2)]
     for i, m in enumerate(meshes):
         desc.meshes.append(MeshDesc(positions=m.vertices.astype(np.float32), indices=m.faces.astype(np.int32)))
         desc.shapes.append(ShapeDesc(mesh=i, material=max(0, i - 1) if i >= 2 else 0))
         xf = np.eye(4)
         xf[:3, 3] = (0, -5, i) if i >= 2 else 0
         desc.instance_sets.append(InstanceSetDesc(shapes=[i], transforms=xf[None]))
-    desc.infinite_lights.append(InfiniteLightDesc(light_to_world=np.eye(4), L=np.ones(3)))
+    desc.lights.append(light("infinite"))
     return desc
 
 

@@ -1,17 +1,21 @@
-"""The Python API: ``load_scene`` (parse and build, no device work) and ``render``."""
+"""The Python API: ``load_scene`` (parse and build, no device work), ``open_session`` (upload, resume) and ``render``."""
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
-from renderer.scene.description import SceneDescription
 from renderer.device.runtime import init_warp
+from renderer.errors import RenderWarning
+from renderer.io.checkpoint import load_checkpoint
+from renderer.scene.description import SceneDescription
 from renderer.session import RenderSession, RenderStats
 from renderer.settings import RenderSettings, settings_for
 
-__all__ = ["load_scene", "render", "init_warp", "settings_for", "RenderStats", "RenderSettings", "RenderSession"]
+__all__ = ["load_scene", "open_session", "render", "init_warp", "settings_for", "RenderStats", "RenderSettings",
+           "RenderSession"]
 
 
 def load_scene(path: str | Path) -> SceneDescription:
@@ -21,6 +25,17 @@ def load_scene(path: str | Path) -> SceneDescription:
     return load_description(path)
 
 
+def open_session(scene: SceneDescription, settings: RenderSettings, device: str = "cpu", threads: int | None = None,
+                 resume: str | Path | None = None) -> RenderSession:
+    """Upload ``scene`` and get a session ready to render passes; with ``resume``, continue the
+    checkpoint at that path (refused if it was made from another scene or with other settings).
+    ``render`` and the ``render`` command both start here."""
+    session = RenderSession(scene, settings, device=device, threads=threads)
+    if resume is not None:
+        session.restore(load_checkpoint(resume), source=str(resume))
+    return session
+
+
 def render(scene: SceneDescription, spp: int | None = None, device: str = "cpu", seed: int | None = None,
            width: int | None = None, height: int | None = None, max_depth: int | None = None,
            nee: bool = True, rr_depth: int | None = None, threads: int | None = None, time_limit: float | None = None,
@@ -28,10 +43,13 @@ def render(scene: SceneDescription, spp: int | None = None, device: str = "cpu",
            thin_film: str | None = None) -> np.ndarray:
     """Render and return linear RGB as float32 (H, W, 3). ``spp``, ``seed``, ``max_depth`` and the
     resolution default to the scene file's values. ``progress(done, total)`` runs after every pass.
-    ``thin_film``: the thinfilm material's colour mode, ``rgb3`` or ``spectral:N`` (default spectral:32)."""
-    session = RenderSession(scene, settings_for(scene, seed=seed, width=width, height=height, max_depth=max_depth,
-                                                nee=nee, rr_depth=rr_depth, thin_film=thin_film),
-                            device=device, threads=threads)
+    ``thin_film``: the thinfilm material's colour mode, ``rgb3`` or ``spectral:N`` (default spectral:32).
+    Each of the scene's warnings is issued as a :class:`RenderWarning` (and listed in ``stats.warnings``)."""
+    session = open_session(scene, settings_for(scene, seed=seed, width=width, height=height, max_depth=max_depth,
+                                               nee=nee, rr_depth=rr_depth, thin_film=thin_film),
+                           device=device, threads=threads)
+    for w in session.stats.warnings:
+        warnings.warn(w, RenderWarning, stacklevel=2)
     spp = scene.sampler.spp if spp is None else int(spp)
     on_pass = (lambda s: progress(s.film.spp, spp)) if progress else None
     result = session.run(spp, time_limit=time_limit, on_pass=on_pass)

@@ -1,6 +1,6 @@
 """``render scene.pbrt -o out.exr``: the command-line renderer.
 
-Exit codes: 0 done; 2 bad scene or arguments (one line naming file:line); 3 the image was
+Exit codes: 0 done; 2 bad scene or arguments (one line per error, naming file:line); 3 the image was
 written but some samples were NaN/Inf and were dropped; 130 interrupted by SIGINT (Ctrl-C) and
 143 by SIGTERM, after writing what was rendered (and the checkpoint, if one was asked for).
 """
@@ -143,13 +143,12 @@ def main(argv: list[str] | None = None) -> int:
     from renderer.errors import RenderError
 
     try:
-        from renderer.api import load_scene, settings_for
+        from renderer.api import load_scene, open_session, settings_for
+        from renderer.io.checkpoint import save_checkpoint
         from renderer.io.metrics import relative_mse
-        from renderer.session import RenderSession, load_checkpoint, save_checkpoint
+        from renderer.session import RenderSession
 
         scene = load_scene(args.scene)
-        for w in scene.warnings:
-            print(f"warning: {w}", file=sys.stderr)
         out = args.output or Path(scene.film.filename)
         if out.suffix.lower() not in (".exr", ".png"):
             raise RenderError(f"output must end in .exr or .png, got {out}")
@@ -166,9 +165,10 @@ def main(argv: list[str] | None = None) -> int:
             if ref.shape[:2] != (settings.height, settings.width):
                 raise RenderError(f"reference {args.reference} is {ref.shape[1]}x{ref.shape[0]}, "
                                   f"not {settings.width}x{settings.height}")
-        session = RenderSession(scene, settings, device=args.device, threads=args.threads)
+        session = open_session(scene, settings, device=args.device, threads=args.threads, resume=args.resume)
+        for w in session.stats.warnings:
+            print(f"warning: {w}", file=sys.stderr)
         if args.resume:
-            session.restore(load_checkpoint(args.resume), source=str(args.resume))
             print(f"render: resumed {args.resume} at {session.film.spp} spp", file=sys.stderr)
         spp = scene.sampler.spp if args.spp is None else args.spp
         prog = _Progress(not args.quiet, spp, session.film.spp)
@@ -178,7 +178,7 @@ def main(argv: list[str] | None = None) -> int:
             prog(s.film.spp)
             now = time.perf_counter()
             if args.checkpoint and now - clock["checkpoint"] >= args.checkpoint_every:
-                save_checkpoint(args.checkpoint, s)
+                save_checkpoint(args.checkpoint, s.state())
                 clock["checkpoint"] = now
             if args.write_partial_every and now - clock["partial"] >= args.write_partial_every:
                 write_outputs(out, s.image(), {}, args.exposure, header(s))
@@ -214,7 +214,7 @@ def main(argv: list[str] | None = None) -> int:
                     img = denoise(img, aovs["albedo"], aovs["normal"])
             write_outputs(out, img, layers, args.exposure, header(session))
             if args.checkpoint:
-                save_checkpoint(args.checkpoint, session)
+                save_checkpoint(args.checkpoint, session.state())
         print(f"wrote {out}: {stats.width}x{stats.height}, {stats.spp} spp in {stats.seconds:.2f} s "
               f"(+{stats.compile_seconds:.2f} s kernel load), {stats.samples_per_second / 1e6:.3f} M samples/s, "
               f"{stats.rays_per_second / 1e6:.3f} M rays/s, peak memory {stats.peak_memory_mb:.0f} MB",
@@ -234,7 +234,8 @@ def main(argv: list[str] | None = None) -> int:
     except (RenderError, ValueError, OSError) as e:
         if args.debug:
             traceback.print_exc()
-        print(f"render: error: {e}", file=sys.stderr)
+        for line in str(e).splitlines() or [type(e).__name__]:   # SceneErrors: one located error per line
+            print(f"render: error: {line}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("render: interrupted before any pass finished; nothing written", file=sys.stderr)

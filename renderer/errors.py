@@ -37,6 +37,11 @@ class MissingFileError(SceneError):
         super().__init__(f"{what} not found: {path}", loc)
 
 
+class RenderWarning(UserWarning):
+    """A scene or setting the renderer accepts but not quite as written (an ignored parameter, a
+    feature rendered approximately, no lights): ``render()`` issues one per scene warning."""
+
+
 class UnsupportedError(SceneError):
     """A type name (material, texture, light, shape, ...) this renderer does not implement. The
     builder collects these and reports every one at once, each with its file and line."""

@@ -11,16 +11,19 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Iterable
+from typing import TYPE_CHECKING, Any, Iterable
 
 import numpy as np
 
 from renderer.errors import Location, SceneError
-from renderer.scene.params import ParamSet
+
+if TYPE_CHECKING:   # only annotations: importing the scene package here would make import order matter
+    from renderer.scene.params import ParamSet
 
 #: Parameter types: "float" and "rgb" may be textures and get a device slot; "bool" gets a flag
-#: bit; "int" and "string" are host-side only (they shape the table, not the per-hit value).
-TYPES = ("float", "rgb", "bool", "int", "string")
+#: bit; "int", "string" and "point3" (a position, e.g. a light's "from") are host-side only (they
+#: shape the table, not the per-hit value).
+TYPES = ("float", "rgb", "bool", "int", "string", "point3")
 
 
 @dataclass(frozen=True)
@@ -68,6 +71,10 @@ class Parameter:
             if a.size not in (1, 3):
                 raise SceneError(f'{owner}: parameter "{self.name}" needs 1 or 3 values, got {a.size}', loc)
             a = np.broadcast_to(a.ravel(), (3,)) if a.size == 1 else a.ravel()
+        elif self.type == "point3":
+            if a.size != 3:
+                raise SceneError(f'{owner}: parameter "{self.name}" needs 3 values (one point), got {a.size}', loc)
+            a = a.ravel()
         elif a.size != 1:
             raise SceneError(f'{owner}: parameter "{self.name}" needs one value, got {a.size}', loc)
         if not np.all(np.isfinite(a)):
@@ -79,7 +86,7 @@ class Parameter:
             if float(a.ravel()[0]) != math.floor(float(a.ravel()[0])):
                 raise SceneError(f'{owner}: parameter "{self.name}" must be an integer, got {value!r}', loc)
             return int(a.ravel()[0])
-        return tuple(float(x) for x in a) if self.type == "rgb" else float(a.ravel()[0])
+        return tuple(float(x) for x in a) if self.type in ("rgb", "point3") else float(a.ravel()[0])
 
     def read(self, ps: ParamSet, owner: str) -> Any:
         """This parameter's value from a pbrt parameter list, or None when it is absent."""
@@ -99,6 +106,8 @@ class Parameter:
             v = ps.bool(self.name)
         elif self.type == "int":
             v = ps.int(self.name)
+        elif self.type == "point3":
+            v = ps.floats(self.name, ("point3", "point"))
         else:
             v = ps.string(self.name)
         return self.check(v, owner, loc)

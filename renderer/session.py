@@ -11,7 +11,6 @@ import resource
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 from typing import Callable
 
 import numpy as np
@@ -19,6 +18,7 @@ import numpy as np
 from renderer.errors import RenderError
 from renderer.scene.description import SceneDescription
 from renderer.settings import RenderSettings
+
 
 @dataclass
 class RenderStats:
@@ -102,7 +102,7 @@ class RenderSession:
 
         def launch(band: np.ndarray) -> None:
             wp.launch(self.kernel, dim=len(band) * self.ds.width,
-                      inputs=[self.ds.struct, s.seed, sample, 1, int(band[0]), s.max_depth, s.rr_depth,
+                      inputs=[self.ds.struct, s.seed, sample, int(band[0]), s.max_depth, s.rr_depth,
                               self.film.sum, self.film.bad, self.film.rays],
                       device=self.device)
             wp.synchronize_device(self.device)
@@ -171,24 +171,3 @@ class RenderSession:
         self.film.spp = int(state["spp"])
         self.stats.seconds = float(state["seconds"])
         self._update_stats(self.stats.seconds)
-
-
-def save_checkpoint(path: str | Path, session: RenderSession) -> None:
-    """Write the session's state atomically (a crash mid-write keeps the previous checkpoint)."""
-    from renderer.io.images import atomic_path
-
-    with atomic_path(path) as tmp:
-        with open(tmp, "wb") as f:
-            np.savez(f, **session.state())
-
-
-def load_checkpoint(path: str | Path) -> dict[str, np.ndarray]:
-    from renderer.errors import MissingFileError
-
-    if not Path(path).is_file():
-        raise MissingFileError(path, None, "checkpoint")
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            return {k: z[k] for k in z.files}
-    except (OSError, ValueError) as e:
-        raise RenderError(f"cannot read checkpoint {path}: {e}") from e

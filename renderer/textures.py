@@ -8,13 +8,13 @@ from pathlib import Path
 import numpy as np
 import warp as wp
 
-from renderer.errors import MissingFileError, SceneError
+from renderer.errors import SceneError
 from renderer.scene.description import TextureDesc
+from renderer.scene.texture_params import WRAP, read_texture
 
 CONSTANT = 0
 IMAGE = 1
 CHECKERBOARD = 2
-WRAP = {"repeat": 0, "clamp": 1, "black": 2}
 
 
 @wp.struct
@@ -103,8 +103,6 @@ class TextureTable:
 
         key = (path, encoding)
         if key not in self._image_cache:
-            if not path.is_file():
-                raise MissingFileError(path, loc, "texture image")
             try:
                 img = read_image(path, srgb=(encoding.lower() == "srgb"))
             except Exception as e:  # unreadable or corrupt image: say which file
@@ -125,57 +123,26 @@ class TextureTable:
         key = (desc.name, desc.value_type)
         if key in self.named:
             return self.named[key]
-        p = desc.params
-        uvmap = (p.float("uscale", 1.0), p.float("vscale", 1.0), p.float("udelta", 0.0), p.float("vdelta", 0.0))
-        mapping = p.string("mapping", "uv")
-        if mapping != "uv":
-            raise SceneError(f'texture mapping "{mapping}" is not supported (only "uv")', desc.loc)
-        getc = p.float if desc.value_type == "float" else p.rgb
-        if desc.kind == "constant":
-            tid = self.add_constant(getc("value", 1.0))
-        elif desc.kind == "imagemap":
-            fname = p.string("filename")
-            if not fname:
-                raise SceneError('imagemap texture needs "string filename"', desc.loc)
-            path = (desc.base_dir / fname).resolve()
-            default_enc = "linear" if path.suffix.lower() in (".exr", ".hdr", ".pfm") else "sRGB"
-            enc = p.string("encoding", default_enc)
-            wrap = p.string("wrap", "repeat")
-            if wrap not in WRAP:
-                raise SceneError(f'imagemap wrap must be one of {sorted(WRAP)}, got "{wrap}"', desc.loc)
-            off, w, h = self._load_image(path, enc, desc.loc)
-            s = p.float("scale", 1.0)
-            if p.bool("invert", False):
-                raise SceneError('imagemap "invert" is not supported', desc.loc)
-            p.string("filter")
-            tid = self._add(IMAGE, s, uvmap=uvmap, image=(off, w, h, WRAP[wrap]))
-        elif desc.kind == "checkerboard":
-            if p.int("dimension", 2) != 2:
-                raise SceneError("only 2D checkerboard textures are supported", desc.loc)
-            t1, t2 = getc("tex1", 1.0), getc("tex2", 0.0)
-            tid = self._add(CHECKERBOARD, t1, alt=t2, uvmap=uvmap)
-        elif desc.kind == "scale":
-            tid = self._scaled(desc, textures, getc)
+        spec = read_texture(desc)
+        if spec.kind == "constant":
+            tid = self.add_constant(spec.value)
+        elif spec.kind == "imagemap":
+            off, w, h = self._load_image(spec.path, spec.encoding, desc.loc)
+            tid = self._add(IMAGE, spec.value, uvmap=spec.uvmap, image=(off, w, h, WRAP[spec.wrap]))
+        elif spec.kind == "checkerboard":
+            tid = self._add(CHECKERBOARD, spec.value, alt=spec.alt, uvmap=spec.uvmap)
+        elif spec.base is None:             # a scale of two constants
+            tid = self.add_constant(spec.value)
         else:
-            raise SceneError(f'texture class "{desc.kind}" is not supported', desc.loc)
+            tid = self._scaled(self.lookup(spec.base, desc.value_type, textures, desc.loc), spec.value)
         self.named[key] = tid
         return tid
 
-    def _scaled(self, desc: TextureDesc, textures: dict[str, TextureDesc], getc) -> int:
-        """pbrt's ``scale`` texture (tex × scale) where at most one factor is a texture: the
-        constant folds into that texture's multiplier."""
-        p = desc.params
-        tex_name, scale_name = p.texture("tex"), p.texture("scale")
-        if tex_name and scale_name:
-            raise SceneError("a scale texture of two textures is not supported", desc.loc)
-        name = tex_name or scale_name
-        if name is None:
-            return self.add_constant(np.asarray(getc("tex", 1.0)) * np.asarray(getc("scale", 1.0)))
-        const = np.asarray(getc("scale" if tex_name else "tex", 1.0), dtype=np.float32)
-        base = self.lookup(name, desc.value_type, textures, desc.loc)
+    def _scaled(self, base: int, factor: np.ndarray) -> int:
+        """A copy of record ``base`` with its values multiplied by ``factor`` (pbrt's scale texture)."""
         self.kind.append(self.kind[base])
-        self.scale.append(self.scale[base] * const)
-        self.alt.append(self.alt[base] * const)
+        self.scale.append(self.scale[base] * factor)
+        self.alt.append(self.alt[base] * factor)
         self.uvmap.append(self.uvmap[base])
         self.image.append(self.image[base])
         return len(self.kind) - 1

@@ -5,15 +5,21 @@ import numpy as np
 import trimesh
 
 from renderer.errors import Location
-from renderer.scene.description import (CameraDesc, FilmDesc, InfiniteLightDesc, InstanceSetDesc, MaterialDesc,
+from renderer.lights import light
+from renderer.scene.description import (CameraDesc, FilmDesc, InstanceSetDesc, MaterialDesc,
                                         MeshDesc, SamplerDesc, SceneDescription, ShapeDesc)
 from renderer.scene.params import Param, ParamSet
+from renderer.scene.transform import world_from_camera
 
 HERE = Location("<test>", 0)
+#: pbrt's LookAt as a camera-to-world matrix, for scenes built in tests
+look_at = world_from_camera
 
 
 def params(**kw) -> ParamSet:
-    """A ParamSet from keyword arguments: floats, RGB triples or texture names (str)."""
+    """A pbrt ParamSet from keyword arguments (floats, RGB triples or texture names as str), for
+    TextureDesc, which still takes pbrt parameter lists; materials take plain values instead
+    (``renderer.materials.material("diffuse", reflectance=(0.8, 0.2, 0.2))``)."""
     ps = ParamSet()
     for k, v in kw.items():
         if isinstance(v, str):
@@ -25,19 +31,6 @@ def params(**kw) -> ParamSet:
         else:
             ps.add(Param("rgb", k, [float(x) for x in v], HERE))
     return ps
-
-
-def look_at(eye, target, up) -> np.ndarray:
-    """pbrt's LookAt as a camera-to-world matrix (+z forward, +x = cross(up, dir))."""
-    eye, target, up = (np.asarray(a, dtype=np.float64) for a in (eye, target, up))
-    d = target - eye
-    d /= np.linalg.norm(d)
-    right = np.cross(up / np.linalg.norm(up), d)
-    right /= np.linalg.norm(right)
-    new_up = np.cross(d, right)
-    m = np.eye(4)
-    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = right, new_up, d, eye
-    return m
 
 
 def sphere_mesh(radius: float = 1.0, subdivisions: int = 4) -> MeshDesc:
@@ -56,5 +49,5 @@ def single_object_scene(material: MaterialDesc, mesh: MeshDesc | None = None, sk
     desc.materials.append(material)
     desc.shapes.append(ShapeDesc(mesh=0, material=0))
     desc.instance_sets.append(InstanceSetDesc(shapes=[0], transforms=np.eye(4)[None]))
-    desc.infinite_lights.append(InfiniteLightDesc(light_to_world=np.eye(4), L=np.full(3, sky)))
+    desc.lights.append(light("infinite", L=(sky, sky, sky)))
     return desc

@@ -10,7 +10,8 @@ import warp as wp
 from renderer.camera import Camera, build_camera
 from renderer.errors import SceneError
 from renderer.geometry.instances import Geometry, GeometryData, build_geometry
-from renderer.lights import AREA, DISTANT, LightTable, Lights
+from renderer.lights import build_light_table, kinds_in
+from renderer.lights.table import Lights
 from renderer.materials import Materials, build_materials, disney, thinfilm
 from renderer.color.rgb_weights import RgbWeightTable, make_rgb_weight_table
 from renderer.scene.description import SceneDescription
@@ -38,9 +39,8 @@ class Features:
 
     materials: tuple[str, ...]
     bump: bool
-    env: bool
-    area: bool
-    soft_distant: bool
+    lights: tuple[str, ...]     # the light kinds in the scene (next-event estimation samples these)
+    escaping: tuple[str, ...]   # the kinds a ray leaving the scene can see (an environment, a soft sun)
     nee: bool = True
     subsurface: bool = False    # some disney material scatters below its surface (renderer.subsurface)
 
@@ -75,9 +75,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     if not desc.instance_sets:
         raise SceneError("the scene contains no shapes", None)
     table = TextureTable()
-    warnings = desc.warnings
-    mats, mat_keep, used = build_materials(desc.materials, desc.textures, table, warnings, device)
-    lights = LightTable()
+    mats, mat_keep, used = build_materials(desc.materials, desc.textures, table, device)
 
     # flatten instance sets into one instance list
     inst_mesh, inst_shape, xforms = [], [], []
@@ -91,38 +89,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     inst_shape_a = np.concatenate(inst_shape)
     xform_a = np.concatenate(xforms)
 
-    # area lights: world-space triangles of every instance of an emissive shape
-    shape_light = -np.ones(max(1, len(desc.shapes)), dtype=np.int32)
-    for si, shape in enumerate(desc.shapes):
-        if shape.area_light is None:
-            continue
-        mesh = desc.meshes[shape.mesh]
-        sel = np.nonzero(inst_shape_a == si)[0]
-        tris = []
-        for k in sel:
-            m = xform_a[k]
-            p = mesh.positions.astype(np.float64) @ m[:3, :3].T + m[:3, 3]
-            t = p[mesh.indices]
-            if shape.reverse_orientation:
-                t = t[:, ::-1]
-            tris.append(t)
-        if tris:
-            shape_light[si] = lights.add_area(np.concatenate(tris), shape.area_light.L, shape.area_light.two_sided)
-
-    for inf in desc.infinite_lights:
-        image = None
-        if inf.filename is not None:
-            from renderer.errors import MissingFileError
-            from renderer.io.images import read_image
-
-            if not inf.filename.is_file():
-                raise MissingFileError(inf.filename, inf.loc, "environment image")
-            image = read_image(inf.filename, srgb=True)
-        lights.add_infinite(inf.L, image, inf.light_to_world, inf.loc)
-    for dl in desc.distant_lights:
-        lights.add_distant(dl.direction, dl.L, dl.angular_radius_deg)
-    if not lights.kind:
-        warnings.append("scene has no lights: the image will be black")
+    lights, shape_light = build_light_table(desc, inst_shape_a, xform_a)
 
     geo = build_geometry([(m.positions, m.indices, m.normals, m.uvs) for m in desc.meshes],
                          inst_mesh_a, inst_shape_a, xform_a, device)
@@ -143,14 +110,14 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     S.shape_flip = wp.array(np.array(flip, np.int32), dtype=int, device=device)
     S.spectral, S.spectral_n = _spectral_table(thinfilm.NAME in used, thin_film, device)
 
+    light_kinds, escaping = kinds_in(lights)
     feats = Features(
         materials=tuple(sorted(used)),
         bump=bool(np.any(mats.bump.numpy() >= 0)),
-        env=lights.env >= 0,
-        area=AREA in lights.kind,
-        soft_distant=any(k == DISTANT and c < 1.0 for k, c in zip(lights.kind, lights.cos_max)),
+        lights=light_kinds,
+        escaping=escaping,
         nee=nee,
-        subsurface=any(m.kind == disney.NAME and disney.has_subsurface(m.params) for m in desc.materials),
+        subsurface=any(m.kind == disney.NAME and disney.has_subsurface(m.values) for m in desc.materials),
     )
     keep = [geo, mat_keep, tex_keep, light_keep, S.shape_material, S.shape_light, S.shape_flip, S.spectral.w]
     return DeviceScene(struct=S, features=feats, device=device, width=width, height=height, keep=keep, geometry=geo)

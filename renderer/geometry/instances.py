@@ -31,7 +31,6 @@ class GeometryData:
     meshes: list = field(default_factory=list)
     arrays: list = field(default_factory=list)
     tlas: object = None
-    bounds: tuple[np.ndarray, np.ndarray] | None = None
 
 
 def build_geometry(meshes: list[tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]],
@@ -61,7 +60,6 @@ def build_geometry(meshes: list[tuple[np.ndarray, np.ndarray, np.ndarray | None,
     to_world = np.ascontiguousarray(inst_to_world, dtype=np.float32).reshape(-1, 4, 4)
     to_object = np.linalg.inv(to_world.astype(np.float64)).astype(np.float32)
     lo, hi = _instance_bounds(np.array(mesh_lo), np.array(mesh_hi), np.asarray(inst_mesh), to_world)
-    data.bounds = (lo, hi)
 
     def arr(a, dtype, empty_shape):
         a = np.concatenate(a) if a else np.zeros(empty_shape, dtype=np.float32)

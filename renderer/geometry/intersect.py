@@ -30,8 +30,6 @@ class Surface:
     uv: wp.vec2
     dpdu: wp.vec3
     dpdv: wp.vec3
-    shape: int
-    area: float                              # world-space area of the hit triangle
     err: float                               # Σ b_i |p_i|: the scale of the float32 error in p
 
 
@@ -95,7 +93,6 @@ def surface_at(geo: Geometry, hit: Hit, flip: bool) -> Surface:
     e2 = p2 - p0
     c = wp.cross(e1, e2)
     la = wp.length(c)
-    s.area = 0.5 * la
     ng = wp.vec3(0.0, 0.0, 1.0)
     if la > 0.0:
         ng = c / la
@@ -140,5 +137,4 @@ def surface_at(geo: Geometry, hit: Hit, flip: bool) -> Surface:
         t = wp.normalize(wp.where(wp.abs(ng[0]) > 0.9, wp.vec3(0.0, 1.0, 0.0), wp.vec3(1.0, 0.0, 0.0)))
         s.dpdu = wp.normalize(wp.cross(t, ng))
         s.dpdv = wp.cross(ng, s.dpdu)
-    s.shape = geo.inst_shape[inst]
     return s

@@ -7,6 +7,7 @@ without extra code; specular-only surfaces report their Fresnel-weighted reflect
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 import warp as wp
@@ -14,11 +15,12 @@ import warp as wp
 from renderer.camera import generate_ray
 from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import intersect, surface_at
-from renderer.integrators.shading import bump_normal, load_bsdf
-from renderer.materials import dispatch_table
-from renderer.materials.bsdf import BSDFSample
-from renderer.sampling.frames import frame_from_tangent, to_local
+from renderer.integrators.shading import load_bsdf, shading_functions
+from renderer.sampling.frames import to_local
 from renderer.sampling.rng import sample_rng
+
+if TYPE_CHECKING:
+    from renderer.session import RenderSession
 
 AOV_NAMES = ("albedo", "normal", "depth")
 #: Channel names per AOV in the EXR (layer.channel, as OpenEXR's multi-layer convention).
@@ -27,9 +29,7 @@ AOV_CHANNELS = {"albedo": ("R", "G", "B"), "normal": ("X", "Y", "Z"), "depth": (
 
 @lru_cache(maxsize=None)
 def aov_kernel(features: Features) -> wp.Kernel:
-    mods, kinds = dispatch_table(features.materials)
-    n_mat = len(mods)
-    has_bump = features.bump
+    shading_frame, _, sample_bsdf = shading_functions(features)
 
     @wp.kernel(module="unique")
     def first_hit(scene: Scene, seed: int, n_samples: int, albedo: wp.array(dtype=wp.vec3),
@@ -54,24 +54,17 @@ def aov_kernel(features: Features) -> wp.Kernel:
                 m = scene.shape_material[shape]
                 b = load_bsdf(scene, m, s.uv)
                 b.wavelength_u = wp.randf(rng)
-                ns = s.ns
-                if wp.static(has_bump):
-                    if scene.mat.bump[m] >= 0:
-                        ns = bump_normal(scene, scene.mat.bump[m], s.uv, ns, s.dpdu, s.dpdv)
-                frame = frame_from_tangent(ns, s.dpdu)
+                frame = shading_frame(scene, m, s)
                 wo_l = to_local(frame, -ray.d)
-                bs = BSDFSample()
-                u = wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng))
-                for j in range(wp.static(n_mat)):
-                    if b.kind == wp.static(kinds[j]):
-                        bs = wp.static(mods[j].sample)(b, wo_l, u)
+                bs = sample_bsdf(b, wo_l, wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)))
                 if bs.pdf > 0.0 and wp.isfinite(bs.weight):
                     a = a + wp.vec3(wp.clamp(bs.weight[0], 0.0, 1.0), wp.clamp(bs.weight[1], 0.0, 1.0),
                                     wp.clamp(bs.weight[2], 0.0, 1.0))
-                n = n + ns
+                n = n + frame.n
                 hits += 1
                 # depth as pbrt's: distance along the camera's z axis
-                fwd = wp.normalize(wp.vec3(scene.cam.to_world[0, 2], scene.cam.to_world[1, 2], scene.cam.to_world[2, 2]))
+                cw = scene.cam.to_world
+                fwd = wp.normalize(wp.vec3(cw[0, 2], cw[1, 2], cw[2, 2]))
                 z = z + hit.t * wp.dot(ray.d, fwd)
         inv = 1.0 / float(wp.max(n_samples, 1))
         albedo[pixel] = a * inv
@@ -84,7 +77,7 @@ def aov_kernel(features: Features) -> wp.Kernel:
     return first_hit
 
 
-def render_aovs(session, n_samples: int = 16) -> dict[str, np.ndarray]:
+def render_aovs(session: RenderSession, n_samples: int = 16) -> dict[str, np.ndarray]:
     """Albedo (H, W, 3) in [0, 1] (box-filtered over ``n_samples``, 0 for the background), unit
     shading normal (H, W, 3) and camera-space depth (H, W, 1) averaged over the samples that hit
     (both 0 where nothing is hit)."""
@@ -93,5 +86,6 @@ def render_aovs(session, n_samples: int = 16) -> dict[str, np.ndarray]:
     out = {"albedo": wp.zeros(W * H, dtype=wp.vec3, device=dev), "normal": wp.zeros(W * H, dtype=wp.vec3, device=dev),
            "depth": wp.zeros(W * H, dtype=float, device=dev)}
     wp.launch(aov_kernel(ds.features), dim=W * H,
-              inputs=[ds.struct, session.settings.seed, n_samples, out["albedo"], out["normal"], out["depth"]], device=dev)
+              inputs=[ds.struct, session.settings.seed, n_samples, out["albedo"], out["normal"], out["depth"]],
+              device=dev)
     return {k: v.numpy().reshape(H, W, -1) for k, v in out.items()}

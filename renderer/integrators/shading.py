@@ -1,13 +1,22 @@
-"""The shading step every kernel shares: a hit's material parameters from their textures, and the
-bump-mapped shading normal."""
+"""The shading step every kernel shares: a hit's material parameters from their textures, the
+bump-mapped shading frame, and the material dispatch, written once for the path and AOV kernels.
+
+``shading_functions(features)`` builds (once per feature set) the Warp functions that switch over
+exactly the material types a scene uses, so a kernel calls ``eval_pdf``/``sample`` once per vertex
+instead of looping over the registry itself."""
 from __future__ import annotations
+
+from functools import lru_cache
+from typing import NamedTuple
 
 import warp as wp
 
-from renderer.device.scene import Scene
-from renderer.materials.bsdf import BSDF, MAX_SLOTS, Slots
+from renderer.device.scene import Features, Scene
+from renderer.geometry.intersect import Surface
+from renderer.materials import dispatch_table
+from renderer.materials.bsdf import BSDF, MAX_SLOTS, BSDFEval, BSDFSample, Slots
+from renderer.sampling.frames import Frame, frame_from_tangent
 from renderer.textures import texture_eval
-
 
 #: Finite-difference step in texture space for bump mapping (pbrt's fallback without ray differentials).
 BUMP_DELTA = 0.0005
@@ -27,6 +36,7 @@ def load_bsdf(scene: Scene, m: int, uv: wp.vec2) -> BSDF:
     b = BSDF()
     b.kind = scene.mat.kind[m]
     b.p = p
+    b.flags = scene.mat.flags[m]
     b.spectral = scene.spectral
     b.spectral_n = scene.spectral_n
     return b
@@ -51,3 +61,45 @@ def bump_normal(scene: Scene, tid: int, uv: wp.vec2, ns: wp.vec3, dpdu: wp.vec3,
     if wp.dot(n, ns) < 0.0:
         n = -n
     return n
+
+
+class Shading(NamedTuple):
+    """The per-vertex shading functions of one feature set (each a ``wp.func``)."""
+
+    frame: wp.Function      # (scene, material, surface) -> Frame: bump-mapped shading frame
+    eval_pdf: wp.Function   # (bsdf, wo, wi) -> BSDFEval, local directions
+    sample: wp.Function     # (bsdf, wo, u) -> BSDFSample
+
+
+@lru_cache(maxsize=None)
+def shading_functions(features: Features) -> Shading:
+    mods, kinds = dispatch_table(features.materials)
+    n_mat = len(mods)
+    has_bump = features.bump
+
+    @wp.func
+    def shading_frame(scene: Scene, m: int, s: Surface) -> Frame:
+        ns = s.ns
+        if wp.static(has_bump):
+            bt = scene.mat.bump[m]
+            if bt >= 0:
+                ns = bump_normal(scene, bt, s.uv, ns, s.dpdu, s.dpdv)
+        return frame_from_tangent(ns, s.dpdu)
+
+    @wp.func
+    def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+        e = BSDFEval()
+        for j in range(wp.static(n_mat)):
+            if b.kind == wp.static(kinds[j]):
+                e = wp.static(mods[j].eval_pdf)(b, wo, wi)
+        return e
+
+    @wp.func
+    def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+        s = BSDFSample()
+        for j in range(wp.static(n_mat)):
+            if b.kind == wp.static(kinds[j]):
+                s = wp.static(mods[j].sample)(b, wo, u)
+        return s
+
+    return Shading(shading_frame, eval_pdf, sample)

@@ -51,4 +51,7 @@ def scene_fingerprint(desc: SceneDescription) -> str:
         name = t.params.params.get("filename")
         if name is not None:
             _feed(h, (t.base_dir / str(name.values[0])).resolve())
+    for light in desc.lights:                       # an environment image counts by its bytes too
+        if light.values.get("filename") is not None:
+            _feed(h, Path(light.values["filename"]).resolve())
     return h.hexdigest()

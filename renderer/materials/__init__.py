@@ -1,26 +1,37 @@
-"""The material registry and the device material table.
+"""The material registry, materials as plain values, and the device material table.
 
-A material is a module with ``NAME``, ``slots(builder) -> list[texture id]`` (which validates its
-pbrt parameters and turns each into a texture id, constants included) and the Warp functions
-``eval``, ``pdf`` and ``sample`` (see :mod:`renderer.materials.bsdf`). Registering a module here
-is all it takes to add one; kernels are specialised to the materials a scene uses.
+A material is a module with ``NAME``, ``PARAMS`` (its named parameters, pbrt-v4's names and
+defaults: :class:`renderer.parameters.Parameters`), the Warp functions ``eval_pdf`` and ``sample``
+(see :mod:`renderer.materials.bsdf`) and, where some values derive from others, an optional
+``resolve(values, loc) -> (values, extra flag bits)``. Registering the module in ``REGISTRY`` is
+all it takes to add one: parsing, validation, the device layout and the docs table follow from
+``PARAMS``, and kernels are specialised to the materials a scene uses.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
 from types import ModuleType
+from typing import Any
 
 import numpy as np
 import warp as wp
 
-from renderer.errors import SceneError
+from renderer.errors import Location, SceneError, UnsupportedError
 from renderer.materials import conductor, dielectric, diffuse, disney, thinfilm
-from renderer.materials.bsdf import MAX_SLOTS
+from renderer.materials.bsdf import FIRST_DERIVED_FLAG, MAX_SLOTS
+from renderer.parameters import Parameter, Parameters, TextureRef
 from renderer.scene.description import MaterialDesc, TextureDesc
 from renderer.scene.params import ParamSet
 from renderer.textures import TextureTable
 
 REGISTRY: dict[str, ModuleType] = {m.NAME: m for m in (diffuse, dielectric, conductor, thinfilm, disney)}
+for _m in REGISTRY.values():
+    if len(_m.PARAMS.slot_names) > MAX_SLOTS or (1 << len(_m.PARAMS.flag_names)) > FIRST_DERIVED_FLAG:
+        raise ValueError(f"material {_m.NAME}: more parameters than the device table holds")
+
+#: Parameters every material has (not part of any module's slot layout).
+COMMON = Parameters(
+    Parameter("displacement", "float", None, texture=True, doc="bump map: a float texture of heights"),
+)
 
 
 def kind_id(name: str) -> int:
@@ -33,79 +44,104 @@ def dispatch_table(names: tuple[str, ...]) -> tuple[list[ModuleType], list[int]]
     return [REGISTRY[n] for n in names], [kind_id(n) for n in names]
 
 
+def module_of(kind: str, loc: Location | None = None) -> ModuleType:
+    """The module of a material type; pbrt's interface material and unknown types are refused."""
+    if kind in ("", "none", "interface"):
+        raise UnsupportedError(f'material "{kind or "none"}" (pbrt\'s interface material) is not supported: it '
+                               'marks a boundary between participating media, which are not implemented', loc)
+    module = REGISTRY.get(kind)
+    if module is None:
+        raise UnsupportedError(f'material "{kind}" is not supported (supported: {", ".join(REGISTRY)})', loc)
+    return module
+
+
+def resolve(desc: MaterialDesc) -> tuple[dict[str, Any], int]:
+    """The values a material uploads (derived ones included) and its flag bits beyond the bools."""
+    module = module_of(desc.kind, desc.loc)
+    hook = getattr(module, "resolve", None)
+    return hook(dict(desc.values), desc.loc) if hook else (dict(desc.values), 0)
+
+
+def _checked(desc: MaterialDesc) -> MaterialDesc:
+    disp = desc.values.get("displacement")
+    if disp is not None and not isinstance(disp, TextureRef):
+        raise SceneError(f'material "{desc.kind}": "displacement" must be a float texture', desc.loc)
+    resolve(desc)   # derived-value checks (e.g. thinfilm's clear substrate) fail here, at load time
+    return desc
+
+
+def material(kind: str, /, *, name: str = "", loc: Location | None = None, **values: Any) -> MaterialDesc:
+    """A material from plain Python values, e.g. ``material("diffuse", reflectance=(0.8, 0.2, 0.2))``;
+    a texture is ``TextureRef("name")``. Unknown parameter names and values out of range are errors."""
+    module = module_of(kind, loc)
+    owner = f'material "{kind}"'
+    common = {k: values.pop(k) for k in list(values) if k in COMMON.by_name}
+    v = module.PARAMS.from_python(values, owner, loc) | COMMON.from_python(common, owner, loc)
+    return _checked(MaterialDesc(kind, v, loc, name))
+
+
+def from_pbrt(kind: str, params: ParamSet, loc: Location, name: str = "") -> MaterialDesc:
+    """A material from a pbrt parameter list; what it does not declare stays unread in ``params``
+    for the caller's "not supported and was ignored" warning."""
+    module = module_of(kind, loc)
+    owner = f'material "{kind}"'
+    v = module.PARAMS.from_pbrt(params, owner) | COMMON.from_pbrt(params, owner)
+    return _checked(MaterialDesc(kind, v, loc, name))
+
+
+def parameter_tables() -> str:
+    """The parameter table of every material, as docs/materials.md shows them."""
+    parts = [f"### `{name}`\n\n{m.PARAMS.docs_table()}\n" for name, m in REGISTRY.items()]
+    parts.append(f"### every material\n\n{COMMON.docs_table()}\n")
+    return "\n".join(parts)
+
+
 @wp.struct
 class Materials:
     kind: wp.array(dtype=int)
     slots: wp.array2d(dtype=int)        # (n_materials, MAX_SLOTS) texture ids, -1 unused
+    flags: wp.array(dtype=int)          # bool parameters (one bit each) and derived bits
     bump: wp.array(dtype=int)           # float displacement texture id, -1 for none
 
 
-@dataclass
-class SlotBuilder:
-    """What a material's ``slots`` function uses to turn its parameters into texture ids, with
-    range checks that name the file and line."""
+def device_layout(desc: MaterialDesc) -> tuple[list[tuple[Parameter, Any]], int]:
+    """What a material puts in the device table: per slot (declaration order) its parameter and
+    value (given, derived or default; None leaves the slot empty), and its flag bits."""
+    params = module_of(desc.kind, desc.loc).PARAMS
+    values, flags = resolve(desc)
+    for name in params.flag_names:
+        if params.value(values, name):
+            flags |= getattr(params.flags, name)
+    return [(params.by_name[n], params.value(values, n)) for n in params.slot_names], flags
 
-    params: ParamSet
-    table: TextureTable
-    textures: dict[str, TextureDesc]
-    loc: object
 
-    def _tex(self, name: str, value_type: str) -> int:
-        return self.table.lookup(name, value_type, self.textures, self.loc)
-
-    def _check(self, name: str, v, lo, hi) -> None:
-        a = np.asarray(v, dtype=np.float64)
-        if (lo is not None and np.any(a < lo)) or (hi is not None and np.any(a > hi)):
-            raise SceneError(f'parameter "{name}" = {a.tolist()} is outside [{lo}, {hi}]',
-                             getattr(self.params.params.get(name), "loc", self.loc))
-
-    def rgb(self, name: str, default, lo: float | None = None, hi: float | None = None) -> int:
-        v = self.params.rgb_or_texture(name, default if not isinstance(default, str) else None)
-        if v is None:
-            v = default
-        if isinstance(v, str):
-            return self._tex(v, "spectrum")
-        self._check(name, v, lo, hi)
-        return self.table.add_constant(v)
-
-    def float(self, name: str, default, lo: float | None = None, hi: float | None = None) -> int:
-        v = self.params.float_or_texture(name, default if not isinstance(default, str) else None)
-        if v is None:
-            v = default
-        if isinstance(v, str):
-            return self._tex(v, "float")
-        self._check(name, v, lo, hi)
-        return self.table.add_constant(v)
-
-    def const(self, value: float) -> int:
-        return self.table.add_constant(value)
+def _texture_id(p: Parameter, v: Any, table: TextureTable, textures: dict[str, TextureDesc], loc) -> int:
+    if v is None:
+        return -1
+    if isinstance(v, TextureRef):
+        return table.lookup(v.name, "spectrum" if p.type == "rgb" else "float", textures, loc)
+    return table.add_constant(v)
 
 
 def build_materials(descs: list[MaterialDesc], textures: dict[str, TextureDesc], table: TextureTable,
-                    warnings: list[str], device: str) -> tuple[Materials, list, set[str]]:
-    """Validate every material against its module, returning the device table, the arrays that
-    back it (keep them alive) and the set of material types in use (for kernel specialisation)."""
+                    device: str) -> tuple[Materials, list, set[str]]:
+    """The device table: per material one texture id per slot parameter (constants included),
+    its flags and bump map. Returns the table, the arrays that back it (keep them alive) and the
+    set of material types in use (for kernel specialisation)."""
     n = max(1, len(descs))
     kinds = np.zeros(n, dtype=np.int32)
     slot_ids = -np.ones((n, MAX_SLOTS), dtype=np.int32)
+    flags = np.zeros(n, dtype=np.int32)
     bump = -np.ones(n, dtype=np.int32)
-    used: set[str] = set()
     for i, d in enumerate(descs):
-        module = REGISTRY.get(d.kind)
-        if module is None:
-            raise SceneError(f'material "{d.kind}" is not supported (supported: {", ".join(REGISTRY)})', d.loc)
-        b = SlotBuilder(d.params, table, textures, d.loc)
-        ids = module.slots(b)
-        slot_ids[i, : len(ids)] = ids
+        layout, flags[i] = device_layout(d)
+        for j, (p, v) in enumerate(layout):
+            slot_ids[i, j] = _texture_id(p, v, table, textures, d.loc)
+        bump[i] = _texture_id(COMMON.by_name["displacement"], d.values.get("displacement"), table, textures, d.loc)
         kinds[i] = kind_id(d.kind)
-        disp = d.params.texture("displacement")
-        if disp is not None:
-            bump[i] = table.lookup(disp, "float", textures, d.loc)
-        for p in d.params.unused():
-            warnings.append(f'{p.loc}: parameter "{p.name}" of material "{d.kind}" is not supported and was ignored')
-        used.add(d.kind)
     M = Materials()
     M.kind = wp.array(kinds, dtype=int, device=device)
     M.slots = wp.array(slot_ids, dtype=int, device=device)
+    M.flags = wp.array(flags, dtype=int, device=device)
     M.bump = wp.array(bump, dtype=int, device=device)
-    return M, [M.kind, M.slots, M.bump], used
+    return M, [M.kind, M.slots, M.flags, M.bump], {d.kind for d in descs}

@@ -1,12 +1,15 @@
 """The interface every material implements, in the local shading frame (z = shading normal).
 
-- ``eval(b, wo, wi) -> vec3``: the BSDF value f (without the cosine); 0 for delta lobes.
-- ``pdf(b, wo, wi) -> float``: solid-angle density with which ``sample`` picks ``wi``.
-- ``sample(b, wo, u) -> BSDFSample``: a direction with its throughput weight f·|cos θi|/pdf.
+- ``eval_pdf(b, wo, wi) -> BSDFEval``: the BSDF value f (without the cosine; 0 for delta lobes)
+  and the solid-angle density with which ``sample`` picks ``wi``, computed together because they
+  share most of their work (pbrt's ``f`` + ``PDF``, Mitsuba's ``eval_pdf``).
+- ``sample(b, wo, u) -> BSDFSample``: a direction with its throughput weight f·|cos θi|/pdf and
+  the lobe it came from (``flags``, pbrt's ``BxDFFlags``).
 
 ``wo`` may lie below the surface (transmission, or the back of a two-sided material); each
-material decides what that means. Parameters arrive already evaluated from textures in the rows
-of ``BSDF.p`` (one row per parameter slot, in the order the material's ``SLOTS`` lists them).
+material decides what that means. Parameters arrive already evaluated from their textures in the
+rows of ``BSDF.p``, read by name (``b.p[SLOT.roughness]``); bool parameters are bits of
+``BSDF.flags`` (``b.flags & FLAG.thin``), see :mod:`renderer.parameters`.
 """
 from __future__ import annotations
 
@@ -16,15 +19,32 @@ from renderer.color.rgb_weights import RgbWeightTable
 
 MAX_SLOTS = 16
 Slots = wp.types.matrix(shape=(MAX_SLOTS, 3), dtype=wp.float32)
+#: ``BSDF.flags`` bits below this one are a material's declared bool parameters; a module may use
+#: the bits from here up for values it derives itself (e.g. "reflectance was given").
+FIRST_DERIVED_FLAG = 1 << 16
+
+# Lobe flags of a sample, as pbrt-v4's BxDFFlags: which side wi lies on and what kind of lobe.
+REFLECTION = wp.constant(1)
+TRANSMISSION = wp.constant(2)
+DIFFUSE = wp.constant(4)
+GLOSSY = wp.constant(8)
+SPECULAR = wp.constant(16)
 
 
 @wp.struct
 class BSDF:
     kind: int
     p: Slots
+    flags: int              # the material's bool parameters (and derived bits), one bit each
     wavelength_u: float     # a per-sample random number for materials that sample wavelengths
-    spectral: RgbWeightTable  # spectrum → RGB weights for those materials (the scene's, see device_scene)
+    spectral: RgbWeightTable  # spectrum → RGB weights for those materials (the scene's, see device.scene)
     spectral_n: int         # wavelengths per evaluation; 0: the seed's three (rgb3)
+
+
+@wp.struct
+class BSDFEval:
+    f: wp.vec3              # the BSDF value, without the cosine
+    pdf: float              # the density of sample() at wi (solid angle)
 
 
 @wp.struct
@@ -32,7 +52,8 @@ class BSDFSample:
     wi: wp.vec3
     weight: wp.vec3         # f * |cos θi| / pdf
     pdf: float              # 0 means the sample failed; meaningless for delta lobes
-    specular: bool          # a delta lobe: skip MIS, NEE cannot reach it
+    flags: int              # REFLECTION or TRANSMISSION, and DIFFUSE, GLOSSY or SPECULAR (a delta lobe:
+                            # MIS is skipped, next-event estimation cannot reach it)
     eta: float              # relative index crossed by a transmission (0 or 1: none)
 
 
@@ -44,8 +65,44 @@ def failed_sample() -> BSDFSample:
 
 
 @wp.func
+def side(wo: wp.vec3, wi: wp.vec3) -> int:
+    """REFLECTION when wi lies on wo's side of the surface, else TRANSMISSION."""
+    return wp.where(wo[2] * wi[2] > 0.0, REFLECTION, TRANSMISSION)
+
+
+@wp.func
+def delta_sample(wi: wp.vec3, weight: wp.vec3, pdf: float, flags: int) -> BSDFSample:
+    """A sample of a delta lobe (``flags`` should include SPECULAR): its weight is given directly."""
+    s = BSDFSample()
+    s.wi = wi
+    s.weight = weight
+    s.pdf = pdf
+    s.flags = flags
+    return s
+
+
+@wp.func
+def sampled(wo: wp.vec3, wi: wp.vec3, e: BSDFEval, lobe: int) -> BSDFSample:
+    """A sampled direction of a non-delta lobe finished from its ``eval_pdf``: weight f |cos θi| / pdf."""
+    if e.pdf <= 0.0:
+        return failed_sample()
+    s = BSDFSample()
+    s.wi = wi
+    s.pdf = e.pdf
+    s.weight = e.f * (wp.abs(wi[2]) / e.pdf)
+    s.flags = lobe | side(wo, wi)
+    return s
+
+
+@wp.func
 def same_hemisphere(a: wp.vec3, b: wp.vec3) -> bool:
     return a[2] * b[2] > 0.0
+
+
+@wp.func
+def signed_z(w: wp.vec3, sgn: float) -> wp.vec3:
+    """w with its z multiplied by sgn (±1): how two-sided lobes bring wo above the surface."""
+    return wp.vec3(w[0], w[1], w[2] * sgn)
 
 
 @wp.func

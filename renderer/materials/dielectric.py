@@ -3,29 +3,35 @@ smooth (delta lobes) or rough (GGX, Walter et al. 2007). ``eta`` is the inside o
 index; the surface normal points outside. Radiance is scaled by 1/eta'^2 on refraction."""
 from __future__ import annotations
 
+from typing import Any
+
 import warp as wp
 
-from renderer.materials.bsdf import BSDF, BSDFSample, failed_sample, reflect_z, refract
+from renderer.errors import Location
+from renderer.materials.bsdf import (BSDF, GLOSSY, REFLECTION, SPECULAR, TRANSMISSION, BSDFEval, BSDFSample,
+                                     delta_sample, failed_sample, reflect_z, refract, sampled)
+from renderer.materials.microfacet import (ROUGHNESS_PARAMS, ggx_D, ggx_G, ggx_sample_visible, ggx_visible_pdf,
+                                           is_smooth, resolve_roughness, roughness_to_alpha)
 from renderer.optics.fresnel import fresnel_dielectric
-from renderer.materials.microfacet import (ggx_D, ggx_G, ggx_sample_visible, ggx_visible_pdf, is_smooth,
-                                           roughness_to_alpha)
+from renderer.parameters import Parameter, Parameters
 
 NAME = "dielectric"
+PARAMS = Parameters(
+    Parameter("eta", "float", 1.5, 1.0e-3, texture=True, doc="index of refraction, inside over outside"),
+    *ROUGHNESS_PARAMS,
+)
+SLOT = PARAMS.slots
+FLAG = PARAMS.flags
 
 
-def slots(s) -> list[int]:
-    rough = s.params.float_or_texture("roughness", 0.0, min=0.0) if "roughness" in s.params else 0.0
-    return [
-        s.float("eta", 1.5, lo=1.0e-3),
-        s.float("uroughness", rough, lo=0.0),
-        s.float("vroughness", rough, lo=0.0),
-        s.const(1.0 if s.params.bool("remaproughness", True) else 0.0),
-    ]
+def resolve(values: dict[str, Any], loc: Location | None) -> tuple[dict[str, Any], int]:
+    return resolve_roughness(values), 0
 
 
 @wp.func
 def _alpha(b: BSDF) -> wp.vec2:
-    return roughness_to_alpha(wp.vec2(b.p[1][0], b.p[2][0]), b.p[3][0])
+    return roughness_to_alpha(wp.vec2(b.p[SLOT.uroughness][0], b.p[SLOT.vroughness][0]),
+                              (b.flags & FLAG.remaproughness) != 0)
 
 
 @wp.func
@@ -48,69 +54,51 @@ def _half_vector(wo: wp.vec3, wi: wp.vec3, eta: float) -> wp.vec4:
 
 
 @wp.func
-def eval(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> wp.vec3:
-    eta = b.p[0][0]
+def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+    e = BSDFEval()
+    eta = b.p[SLOT.eta][0]
     alpha = _alpha(b)
     if eta == 1.0 or is_smooth(alpha):
-        return wp.vec3(0.0)
+        return e
     h = _half_vector(wo, wi, eta)
     if h[3] == 0.0:
-        return wp.vec3(0.0)
+        return e
     wm = wp.vec3(h[0], h[1], h[2])
     etap = h[3]
     F = fresnel_dielectric(wp.dot(wo, wm), eta)
     D = ggx_D(wm, alpha)
     G = ggx_G(wo, wi, alpha)
-    if wo[2] * wi[2] > 0.0:
-        return wp.vec3(D * G * F / wp.abs(4.0 * wi[2] * wo[2]))
-    denom = wp.dot(wi, wm) + wp.dot(wo, wm) / etap
-    denom = denom * denom * wi[2] * wo[2]
-    ft = D * (1.0 - F) * G * wp.abs(wp.dot(wi, wm) * wp.dot(wo, wm) / denom)
-    return wp.vec3(ft / (etap * etap))
-
-
-@wp.func
-def pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> float:
-    eta = b.p[0][0]
-    alpha = _alpha(b)
-    if eta == 1.0 or is_smooth(alpha):
-        return 0.0
-    h = _half_vector(wo, wi, eta)
-    if h[3] == 0.0:
-        return 0.0
-    wm = wp.vec3(h[0], h[1], h[2])
-    R = fresnel_dielectric(wp.dot(wo, wm), eta)
     vis = ggx_visible_pdf(wo, wm, alpha)
     if wo[2] * wi[2] > 0.0:
-        return vis / (4.0 * wp.abs(wp.dot(wo, wm))) * R
-    denom = wp.dot(wi, wm) + wp.dot(wo, wm) / h[3]
-    return vis * wp.abs(wp.dot(wi, wm)) / (denom * denom) * (1.0 - R)
+        e.f = wp.vec3(D * G * F / wp.abs(4.0 * wi[2] * wo[2]))
+        e.pdf = vis / (4.0 * wp.abs(wp.dot(wo, wm))) * F
+        return e
+    denom = wp.dot(wi, wm) + wp.dot(wo, wm) / etap
+    denom2 = denom * denom
+    ft = D * (1.0 - F) * G * wp.abs(wp.dot(wi, wm) * wp.dot(wo, wm) / (denom2 * wi[2] * wo[2]))
+    e.f = wp.vec3(ft / (etap * etap))
+    e.pdf = vis * wp.abs(wp.dot(wi, wm)) / denom2 * (1.0 - F)
+    return e
 
 
 @wp.func
 def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
-    eta = b.p[0][0]
+    eta = b.p[SLOT.eta][0]
     alpha = _alpha(b)
-    s = BSDFSample()
     if eta == 1.0 or is_smooth(alpha):
         R = fresnel_dielectric(wo[2], eta)
         if u[2] < R:
-            s.wi = reflect_z(wo)
-            s.weight = wp.vec3(1.0)
-            s.pdf = R
-        else:
-            t = refract(wo, wp.vec3(0.0, 0.0, 1.0), eta)
-            if t[3] == 0.0:
-                return failed_sample()
-            s.wi = wp.vec3(t[0], t[1], t[2])
-            s.weight = wp.vec3(1.0 / (t[3] * t[3]))
-            s.pdf = 1.0 - R
-            s.eta = t[3]
-        s.specular = True
+            return delta_sample(reflect_z(wo), wp.vec3(1.0), R, REFLECTION | SPECULAR)
+        t = refract(wo, wp.vec3(0.0, 0.0, 1.0), eta)
+        if t[3] == 0.0:
+            return failed_sample()
+        s = delta_sample(wp.vec3(t[0], t[1], t[2]), wp.vec3(1.0 / (t[3] * t[3])), 1.0 - R, TRANSMISSION | SPECULAR)
+        s.eta = t[3]
         return s
     wm = ggx_sample_visible(wo, alpha, wp.vec2(u[0], u[1]))
     R = fresnel_dielectric(wp.dot(wo, wm), eta)
     wi = wp.vec3(0.0)
+    eta_t = float(0.0)
     if u[2] < R:
         wi = wm * (2.0 * wp.dot(wo, wm)) - wo
         if wi[2] * wo[2] <= 0.0:
@@ -122,11 +110,7 @@ def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
         wi = wp.vec3(t[0], t[1], t[2])
         if wi[2] * wo[2] >= 0.0:
             return failed_sample()
-        s.eta = t[3]
-    s.wi = wi
-    s.pdf = pdf(b, wo, wi)
-    if s.pdf <= 0.0:
-        return failed_sample()
-    s.weight = eval(b, wo, wi) * (wp.abs(wi[2]) / s.pdf)
-    s.specular = False
+        eta_t = t[3]
+    s = sampled(wo, wi, eval_pdf(b, wo, wi), GLOSSY)
+    s.eta = eta_t
     return s

@@ -3,29 +3,25 @@ from __future__ import annotations
 
 import warp as wp
 
-from renderer.materials.bsdf import BSDF, BSDFSample, failed_sample, same_hemisphere
-from renderer.vecmath import INV_PI
+from renderer.materials.bsdf import BSDF, DIFFUSE, REFLECTION, BSDFEval, BSDFSample, failed_sample, same_hemisphere
+from renderer.parameters import Parameter, Parameters
 from renderer.sampling.warps import cosine_hemisphere
+from renderer.vecmath import INV_PI
 
 NAME = "diffuse"
-
-
-def slots(s) -> list[int]:
-    return [s.rgb("reflectance", 0.5, lo=0.0, hi=1.0)]
-
-
-@wp.func
-def eval(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> wp.vec3:
-    if not same_hemisphere(wo, wi):
-        return wp.vec3(0.0)
-    return b.p[0] * INV_PI
+PARAMS = Parameters(
+    Parameter("reflectance", "rgb", 0.5, 0.0, 1.0, texture=True, doc="albedo"),
+)
+SLOT = PARAMS.slots
 
 
 @wp.func
-def pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> float:
-    if not same_hemisphere(wo, wi):
-        return 0.0
-    return wp.abs(wi[2]) * INV_PI
+def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+    e = BSDFEval()
+    if same_hemisphere(wo, wi):
+        e.f = b.p[SLOT.reflectance] * INV_PI
+        e.pdf = wp.abs(wi[2]) * INV_PI
+    return e
 
 
 @wp.func
@@ -38,6 +34,6 @@ def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
     s.pdf = wp.abs(wi[2]) * INV_PI
     if s.pdf <= 0.0:
         return failed_sample()
-    s.weight = b.p[0]
-    s.specular = False
+    s.weight = b.p[SLOT.reflectance]
+    s.flags = REFLECTION | DIFFUSE
     return s

@@ -18,29 +18,51 @@ Lobes, in the local shading frame (see docs/disney.md for the formulas and their
 Solid (non-thin) surfaces bound an object: hit from the inside only the dielectric interface exists.
 Thin sheets are two-sided. With a non-zero ``scatterdistance`` on a solid surface the diffuse base
 is not part of the BSDF: :mod:`renderer.subsurface` carries that light through the object instead,
-and marks the exit point (row STATE) where the BSDF becomes the exit lobe (1 − F_i/2)/π.
+and marks the exit point (flag EXIT) where the BSDF becomes the exit lobe (1 − F_i/2)/π.
 
-Sampling picks one lobe with probabilities from the lobe weights at wo; ``pdf`` is the
-one-sample MIS mixture Σ p_lobe pdf_lobe and ``sample`` returns f|cos θi|/pdf with that mixture.
+Sampling picks one lobe with probabilities from the lobe weights at wo; the density of
+``eval_pdf`` is the one-sample MIS mixture Σ p_lobe pdf_lobe and ``sample`` returns f|cos θi|/pdf
+with that mixture.
 """
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 import warp as wp
 
-from renderer.materials.bsdf import BSDF, BSDFSample, Slots, failed_sample
-from renderer.materials.dielectric import eval as dielectric_eval
-from renderer.materials.dielectric import pdf as dielectric_pdf
-from renderer.materials.dielectric import sample as dielectric_sample
+from renderer.materials import dielectric
+from renderer.materials.bsdf import (BSDF, DIFFUSE, FIRST_DERIVED_FLAG, GLOSSY, BSDFEval, BSDFSample, Slots,
+                                     failed_sample, sampled, signed_z)
 from renderer.materials.microfacet import ggx_D, ggx_G, ggx_G1, ggx_sample_visible, ggx_visible_pdf, gtr1_D, gtr1_sample
 from renderer.optics.fresnel import fresnel_dielectric
-from renderer.vecmath import INV_PI, luminance, max3
+from renderer.parameters import Parameter, Parameters, TextureRef
 from renderer.sampling.warps import cosine_hemisphere
+from renderer.vecmath import INV_PI, luminance, max3
 
 NAME = "disney"
-
-(COLOR, METALLIC, ETA, ROUGHNESS, SPECULAR_TINT, ANISOTROPIC, SHEEN, SHEEN_TINT, CLEARCOAT, CLEARCOAT_GLOSS,
- SPEC_TRANS, SCATTER_DISTANCE, THIN, FLATNESS, DIFF_TRANS, STATE) = range(16)
+PARAMS = Parameters(
+    Parameter("color", "rgb", 0.5, 0.0, 1.0, texture=True, doc="base colour"),
+    Parameter("metallic", "float", 0.0, 0.0, 1.0, texture=True, doc="blend from dielectric to metal"),
+    Parameter("eta", "float", 1.5, 1.0e-3, texture=True, doc="index of refraction (specular and transmission)"),
+    Parameter("roughness", "float", 0.5, 0.0, 1.0, texture=True, doc="alpha = roughness²"),
+    Parameter("speculartint", "float", 0.0, 0.0, 1.0, texture=True, doc="tints the dielectric specular"),
+    Parameter("anisotropic", "float", 0.0, 0.0, 1.0, texture=True, doc="aspect of the specular lobe along u"),
+    Parameter("sheen", "float", 0.0, 0.0, texture=True, doc="grazing retro-reflective sheen"),
+    Parameter("sheentint", "float", 0.5, 0.0, 1.0, texture=True, doc="tints the sheen"),
+    Parameter("clearcoat", "float", 0.0, 0.0, 1.0, texture=True, doc="weight of the GTR1 clear coat"),
+    Parameter("clearcoatgloss", "float", 1.0, 0.0, 1.0, texture=True, doc="gloss of the clear coat"),
+    Parameter("spectrans", "float", 0.0, 0.0, 1.0, texture=True, doc="specular transmission"),
+    Parameter("scatterdistance", "rgb", 0.0, 0.0, texture=True,
+              doc="mean free path of subsurface scattering (solids; 0: none)"),
+    Parameter("thin", "bool", False, doc="a two-sided thin sheet instead of a solid's boundary"),
+    Parameter("flatness", "float", 0.0, 0.0, 1.0, texture=True, doc="thin sheets: the flattened diffuse share"),
+    Parameter("difftrans", "float", 1.0, 0.0, 2.0, texture=True, doc="thin sheets: diffuse transmission"),
+)
+SLOT = PARAMS.slots
+FLAG = PARAMS.flags
+#: Set by the subsurface step where light leaves the object: only the exit lobe.
+EXIT = wp.constant(FIRST_DERIVED_FLAG)
 #: Lower bound of the GGX alphas (pbrt-v3): roughness 0 is a very sharp lobe, never a delta.
 ALPHA_MIN = wp.constant(1.0e-3)
 #: Burley's clearcoat masking uses GGX with this fixed alpha.
@@ -49,33 +71,13 @@ CLEARCOAT_MASKING_ALPHA = wp.constant(0.25)
 vec5 = wp.types.vector(length=5, dtype=wp.float32)
 
 
-def slots(s) -> list[int]:
-    return [
-        s.rgb("color", 0.5, lo=0.0, hi=1.0),
-        s.float("metallic", 0.0, lo=0.0, hi=1.0),
-        s.float("eta", 1.5, lo=1.0e-3),
-        s.float("roughness", 0.5, lo=0.0, hi=1.0),
-        s.float("speculartint", 0.0, lo=0.0, hi=1.0),
-        s.float("anisotropic", 0.0, lo=0.0, hi=1.0),
-        s.float("sheen", 0.0, lo=0.0),
-        s.float("sheentint", 0.5, lo=0.0, hi=1.0),
-        s.float("clearcoat", 0.0, lo=0.0, hi=1.0),
-        s.float("clearcoatgloss", 1.0, lo=0.0, hi=1.0),
-        s.float("spectrans", 0.0, lo=0.0, hi=1.0),
-        s.rgb("scatterdistance", 0.0, lo=0.0),
-        s.const(1.0 if s.params.bool("thin", False) else 0.0),
-        s.float("flatness", 0.0, lo=0.0, hi=1.0),
-        s.float("difftrans", 1.0, lo=0.0, hi=2.0),
-    ]
-
-
-def has_subsurface(params) -> bool:
+def has_subsurface(values: dict[str, Any]) -> bool:
     """Whether a material needs the integrator's subsurface step: a solid surface whose
     ``scatterdistance`` is a texture or a non-zero constant."""
-    if params.bool("thin", False):
+    if values.get("thin", False):
         return False
-    v = params.rgb_or_texture("scatterdistance", None)
-    return isinstance(v, str) or (v is not None and bool(np.any(np.asarray(v) > 0.0)))
+    v = values.get("scatterdistance")
+    return isinstance(v, TextureRef) or (v is not None and bool(np.any(np.asarray(v) > 0.0)))
 
 
 @wp.struct
@@ -98,6 +100,8 @@ class Params:
     thin: bool
     sss: bool              # the diffuse base is carried by subsurface scattering instead
     exit: bool             # this is a subsurface exit point: only the exit lobe
+    sgn: float             # -1 where a two-sided case is seen from below (see _two_sided), else 1
+    o: wp.vec3             # wo with its z times sgn
 
 
 @wp.func
@@ -109,35 +113,35 @@ def _alphas(r: float, aspect: float) -> wp.vec2:
 @wp.func
 def _load(b: BSDF) -> Params:
     P = Params()
-    c = b.p[COLOR]
+    c = b.p[SLOT.color]
     c = wp.vec3(wp.clamp(c[0], 0.0, 1.0), wp.clamp(c[1], 0.0, 1.0), wp.clamp(c[2], 0.0, 1.0))
     lum = luminance(c)
     P.c = c
     P.tint = wp.where(lum > 0.0, c / wp.max(lum, 1.0e-8), wp.vec3(1.0))
-    m = b.p[METALLIC][0]
-    st = b.p[SPEC_TRANS][0]
+    m = b.p[SLOT.metallic][0]
+    st = b.p[SLOT.spectrans][0]
     P.metallic = m
     P.dw = (1.0 - m) * (1.0 - st)
     P.gw = (1.0 - m) * st
-    eta = b.p[ETA][0]
+    eta = b.p[SLOT.eta][0]
     if wp.abs(eta - 1.0) < 1.0e-3:
         eta = 1.001  # an index-matched interface has no microfacet transmission to sample
     P.eta = eta
-    r = b.p[ROUGHNESS][0]
+    r = b.p[SLOT.roughness][0]
     P.roughness = r
-    aspect = wp.sqrt(1.0 - 0.9 * b.p[ANISOTROPIC][0])
+    aspect = wp.sqrt(1.0 - 0.9 * b.p[SLOT.anisotropic][0])
     P.alpha = _alphas(r, aspect)
     P.alpha_t = _alphas((0.65 * eta - 0.35) * r, aspect)
-    P.spec_tint = b.p[SPECULAR_TINT][0]
-    st_tint = b.p[SHEEN_TINT][0]
-    P.sheen = (wp.vec3(1.0 - st_tint) + P.tint * st_tint) * (P.dw * b.p[SHEEN][0])
-    P.clearcoat = b.p[CLEARCOAT][0]
-    P.cc_alpha = 0.1 + (0.001 - 0.1) * b.p[CLEARCOAT_GLOSS][0]
-    P.flatness = b.p[FLATNESS][0]
-    P.dt = 0.5 * b.p[DIFF_TRANS][0]
-    P.thin = b.p[THIN][0] > 0.5
-    P.sss = (not P.thin) and max3(b.p[SCATTER_DISTANCE]) > 0.0
-    P.exit = b.p[STATE][0] > 0.5
+    P.spec_tint = b.p[SLOT.speculartint][0]
+    st_tint = b.p[SLOT.sheentint][0]
+    P.sheen = (wp.vec3(1.0 - st_tint) + P.tint * st_tint) * (P.dw * b.p[SLOT.sheen][0])
+    P.clearcoat = b.p[SLOT.clearcoat][0]
+    P.cc_alpha = 0.1 + (0.001 - 0.1) * b.p[SLOT.clearcoatgloss][0]
+    P.flatness = b.p[SLOT.flatness][0]
+    P.dt = 0.5 * b.p[SLOT.difftrans][0]
+    P.thin = (b.flags & FLAG.thin) != 0
+    P.sss = (not P.thin) and max3(b.p[SLOT.scatterdistance]) > 0.0
+    P.exit = (b.flags & EXIT) != 0
     return P
 
 
@@ -160,16 +164,11 @@ def _specular_fresnel(P: Params, cos_t: float) -> wp.vec3:
     dielectric lobe)."""
     fd = fresnel_dielectric(cos_t, P.eta)
     r0 = (P.eta - 1.0) / (P.eta + 1.0)
-    dielectric = wp.vec3(fd * (1.0 - P.spec_tint)) + _schlick(P.tint * (r0 * r0), cos_t) * P.spec_tint
-    F = dielectric * P.dw + _schlick(P.c, cos_t) * P.metallic
+    nonmetal = wp.vec3(fd * (1.0 - P.spec_tint)) + _schlick(P.tint * (r0 * r0), cos_t) * P.spec_tint
+    F = nonmetal * P.dw + _schlick(P.c, cos_t) * P.metallic
     if P.thin:
         F = F + wp.vec3(P.gw * fd)
     return F
-
-
-@wp.func
-def _up(w: wp.vec3, sgn: float) -> wp.vec3:
-    return wp.vec3(w[0], w[1], w[2] * sgn)
 
 
 @wp.func
@@ -230,10 +229,10 @@ def _glass(P: Params) -> BSDF:
     """The rough dielectric of the specular transmission, as a :mod:`dielectric` BSDF."""
     g = BSDF()
     p = Slots()
-    p[0, 0] = P.eta
-    p[1, 0] = P.alpha[0]
-    p[2, 0] = P.alpha[1]
-    g.p = p  # row 3 (remaproughness) stays 0: these are alphas already
+    p[dielectric.SLOT.eta, 0] = P.eta
+    p[dielectric.SLOT.uroughness, 0] = P.alpha[0]
+    p[dielectric.SLOT.vroughness, 0] = P.alpha[1]
+    g.p = p  # flags stay 0 (no remaproughness): these are alphas already
     return g
 
 
@@ -280,11 +279,8 @@ def _two_sided(P: Params, wo: wp.vec3) -> float:
 
 
 @wp.func
-def eval(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> wp.vec3:
-    P = _load(b)
-    sgn = _two_sided(P, wo)
-    o = _up(wo, sgn)
-    i = _up(wi, sgn)
+def _value(P: Params, wo: wp.vec3, wi: wp.vec3, o: wp.vec3, i: wp.vec3, glass: BSDFEval) -> wp.vec3:
+    """f, with o and i the directions brought above the surface for two-sided cases."""
     if o[2] <= 0.0 and (P.thin or P.exit):
         return wp.vec3(0.0)
     if P.exit:
@@ -299,7 +295,7 @@ def eval(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> wp.vec3:
     if o[2] > 0.0 and i[2] > 0.0:
         f = _reflection(P, o, i)
     if P.gw > 0.0:
-        g = dielectric_eval(_glass(P), wo, wi)
+        g = glass.f
         if wo[2] * wi[2] < 0.0:
             g = wp.cw_mul(g, wp.vec3(wp.sqrt(P.c[0]), wp.sqrt(P.c[1]), wp.sqrt(P.c[2])))
         f = f + g * P.gw
@@ -307,31 +303,54 @@ def eval(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> wp.vec3:
 
 
 @wp.func
-def pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> float:
-    P = _load(b)
-    p = _probabilities(P, wo)
-    sgn = _two_sided(P, wo)
-    o = _up(wo, sgn)
-    i = _up(wi, sgn)
+def _ggx_reflection_pdf(weight: float, o: wp.vec3, h: wp.vec3, alpha: wp.vec2) -> float:
+    """weight times the density of reflecting o about a visible GGX normal h."""
+    return weight * ggx_visible_pdf(o, h, alpha) / (4.0 * wp.abs(wp.dot(o, h)))
+
+
+@wp.func
+def _density(P: Params, p: vec5, o: wp.vec3, i: wp.vec3, glass: BSDFEval) -> float:
+    """The lobe mixture's density for lobe probabilities p."""
     result = float(0.0)
     if o[2] > 0.0 and i[2] > 0.0:
         result = p[0] * i[2] * INV_PI
         h = wp.normalize(o + i)
         if p[1] > 0.0:
-            result += p[1] * ggx_visible_pdf(o, h, P.alpha) / (4.0 * wp.abs(wp.dot(o, h)))
+            result += _ggx_reflection_pdf(p[1], o, h, P.alpha)
         if p[2] > 0.0:
             result += p[2] * gtr1_D(h[2], P.cc_alpha) * h[2] / (4.0 * wp.abs(wp.dot(o, h)))
     if p[3] > 0.0:
         if P.thin:
             if o[2] > 0.0 and i[2] < 0.0:
                 j = wp.vec3(i[0], i[1], -i[2])
-                h = wp.normalize(o + j)
-                result += p[3] * ggx_visible_pdf(o, h, P.alpha_t) / (4.0 * wp.abs(wp.dot(o, h)))
+                result += _ggx_reflection_pdf(p[3], o, wp.normalize(o + j), P.alpha_t)
         else:
-            result += p[3] * dielectric_pdf(_glass(P), wo, wi)
+            result += p[3] * glass.pdf
     if p[4] > 0.0 and o[2] > 0.0 and i[2] < 0.0:
         result += p[4] * (-i[2]) * INV_PI
     return result
+
+
+@wp.func
+def _seen_from(b: BSDF, wo: wp.vec3) -> Params:
+    """The parameters, with wo brought above the surface where the case is two-sided."""
+    P = _load(b)
+    P.sgn = _two_sided(P, wo)
+    P.o = signed_z(wo, P.sgn)
+    return P
+
+
+@wp.func
+def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+    P = _seen_from(b, wo)
+    i = signed_z(wi, P.sgn)
+    glass = BSDFEval()
+    if P.gw > 0.0 and not P.thin and not P.exit:
+        glass = dielectric.eval_pdf(_glass(P), wo, wi)
+    e = BSDFEval()
+    e.f = _value(P, wo, wi, P.o, i, glass)
+    e.pdf = _density(P, _probabilities(P, wo), P.o, i, glass)
+    return e
 
 
 @wp.func
@@ -341,15 +360,17 @@ def _reflect(o: wp.vec3, h: wp.vec3) -> wp.vec3:
 
 @wp.func
 def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
-    P = _load(b)
+    P = _seen_from(b, wo)
     p = _probabilities(P, wo)
-    sgn = _two_sided(P, wo)
-    o = _up(wo, sgn)
+    o = P.o
+    sgn = P.sgn
     u2 = wp.vec2(u[0], u[1])
     x = u[2]
     i = wp.vec3(0.0)
+    lobe = GLOSSY
     if x < p[0]:
         i = cosine_hemisphere(u2)
+        lobe = DIFFUSE
     elif x < p[0] + p[1]:
         i = _reflect(o, ggx_sample_visible(o, P.alpha, u2))
     elif x < p[0] + p[1] + p[2]:
@@ -363,23 +384,18 @@ def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
         else:
             # reuse the lobe-selection number, rescaled, for the dielectric's reflect/refract choice
             v = wp.clamp((x - p[0] - p[1] - p[2]) / p[3], 0.0, 0.999999)
-            g = dielectric_sample(_glass(P), wo, wp.vec3(u[0], u[1], v))
+            g = dielectric.sample(_glass(P), wo, wp.vec3(u[0], u[1], v))
             if g.pdf <= 0.0:
                 return failed_sample()
-            i = _up(g.wi, sgn)
+            i = signed_z(g.wi, sgn)
     else:
         i = cosine_hemisphere(u2)
         i = wp.vec3(i[0], i[1], -i[2])
+        lobe = DIFFUSE
     if i[2] == 0.0 or (x < p[0] + p[1] + p[2] and i[2] < 0.0):
-        return failed_sample()  # a reflection lobe's sample below the surface: its pdf() excludes it
-    wi = _up(i, sgn)
-    s = BSDFSample()
-    s.wi = wi
-    s.pdf = pdf(b, wo, wi)
-    if s.pdf <= 0.0:
-        return failed_sample()
-    s.weight = eval(b, wo, wi) * (wp.abs(wi[2]) / s.pdf)
-    s.specular = False
+        return failed_sample()  # a reflection lobe's sample below the surface: its density excludes it
+    wi = signed_z(i, sgn)
+    s = sampled(wo, wi, eval_pdf(b, wo, wi), lobe)
     if not P.thin and wo[2] * wi[2] < 0.0:
         s.eta = wp.where(wo[2] > 0.0, P.eta, 1.0 / P.eta)
     return s
@@ -402,7 +418,7 @@ def subsurface_lobe(b: BSDF, cos_o: float) -> SubsurfaceLobe:
     if not P.sss or P.exit or cos_o <= 0.0:
         return s
     s.albedo = P.c
-    s.mfp = b.p[SCATTER_DISTANCE]
+    s.mfp = b.p[SLOT.scatterdistance]
     s.entry = P.dw * (1.0 - 0.5 * schlick_weight(cos_o))
     w = _weights(P, wp.vec3(0.0, 0.0, cos_o))
     sss = s.entry * luminance(P.c)
@@ -414,7 +430,5 @@ def subsurface_lobe(b: BSDF, cos_o: float) -> SubsurfaceLobe:
 def exit_bsdf(b: BSDF) -> BSDF:
     """The same material at a subsurface exit point: only the exit lobe."""
     e = b
-    p = b.p
-    p[STATE, 0] = 1.0
-    e.p = p
+    e.flags = b.flags | EXIT
     return e

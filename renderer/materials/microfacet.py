@@ -1,10 +1,28 @@
 """The anisotropic Trowbridge–Reitz (GGX) microfacet distribution with visible-normal sampling
-(Heitz 2018), shared by the rough conductor and rough dielectric."""
+(Heitz 2018), shared by the rough conductor and rough dielectric, with their shared roughness
+parameters."""
 from __future__ import annotations
+
+from typing import Any
 
 import warp as wp
 
+from renderer.parameters import Parameter
 from renderer.vecmath import PI
+
+#: pbrt-v4's roughness parameters of ``conductor`` and ``dielectric``.
+ROUGHNESS_PARAMS = (
+    Parameter("roughness", "float", 0.0, 0.0, texture=True, doc="shorthand for uroughness = vroughness"),
+    Parameter("uroughness", "float", None, 0.0, texture=True, doc="roughness along u (default: roughness)"),
+    Parameter("vroughness", "float", None, 0.0, texture=True, doc="roughness along v (default: roughness)"),
+    Parameter("remaproughness", "bool", True, doc="alpha = sqrt(roughness) when true (else roughness is alpha)"),
+)
+
+
+def resolve_roughness(values: dict[str, Any]) -> dict[str, Any]:
+    """pbrt's ``roughness`` shorthand: the value of uroughness and vroughness where those are not given."""
+    r = values.get("roughness", 0.0)
+    return {"uroughness": r, "vroughness": r} | values
 
 
 @wp.func
@@ -76,9 +94,9 @@ def is_smooth(alpha: wp.vec2) -> bool:
 
 
 @wp.func
-def roughness_to_alpha(r: wp.vec2, remap: float) -> wp.vec2:
+def roughness_to_alpha(r: wp.vec2, remap: bool) -> wp.vec2:
     """pbrt-v4's remapping: alpha = sqrt(roughness) when ``remaproughness`` is true."""
-    if remap > 0.5:
+    if remap:
         return wp.vec2(wp.sqrt(wp.max(r[0], 0.0)), wp.sqrt(wp.max(r[1], 0.0)))
     return r
 

@@ -20,48 +20,45 @@ observer (``spectral:N``, the render option). Lobes:
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Any
 
 import warp as wp
 
-from renderer.errors import SceneError
-from renderer.materials.bsdf import BSDF, BSDFSample, failed_sample, reflect_z, refract, same_hemisphere
+from renderer.errors import Location, SceneError
+from renderer.materials.bsdf import (BSDF, DIFFUSE, REFLECTION, SPECULAR, TRANSMISSION, BSDFEval, BSDFSample,
+                                     delta_sample, failed_sample, reflect_z, refract, same_hemisphere)
 from renderer.optics.thin_film import thin_film_rgb3, thin_film_rgb_sampled
-from renderer.vecmath import INV_PI, max3
+from renderer.parameters import Parameter, Parameters
 from renderer.sampling.warps import cosine_hemisphere
-
-if TYPE_CHECKING:
-    from renderer.materials import SlotBuilder
+from renderer.vecmath import INV_PI, max3
 
 NAME = "thinfilm"
+PARAMS = Parameters(
+    Parameter("eta_outer", "float", 1.0, 1.0e-3, texture=True, doc="index of the medium the normal points to"),
+    Parameter("eta_film", "float", 1.55, 1.0e-3, texture=True, doc="index of the film"),
+    Parameter("eta_inner", "float", 1.66, 1.0e-3, texture=True, doc="real index of the substrate"),
+    Parameter("k_inner", "float", 0.0, 0.0, doc="imaginary index of the substrate (a metal)"),
+    Parameter("thickness", "float", 500.0, 0.0, texture=True, doc="film thickness (nm)"),
+    Parameter("thicknessmap", "float", 0.0, texture=True, doc="added to the thickness, times thicknessscale (nm)"),
+    Parameter("thicknessscale", "float", 1.0, doc="factor of thicknessmap"),
+    Parameter("transmission", "bool", False, doc="a clear substrate refracts what the film transmits"),
+    Parameter("reflectance", "rgb", 0.0, 0.0, 1.0, texture=True,
+              doc="albedo of an opaque substrate's Lambertian base"),
+)
+SLOT = PARAMS.slots
+FLAG = PARAMS.flags
 
-ETA_OUTER, ETA_FILM, ETA_INNER, K_INNER, THICKNESS, THICKNESS_MAP, THICKNESS_SCALE, TRANSMISSION, BASE = range(9)
 
-
-def slots(s: SlotBuilder) -> list[int]:
-    """k_inner, thicknessscale and transmission are plain values: the check below needs them."""
-    transmission = bool(s.params.bool("transmission", False))
-    k_inner = s.params.float("k_inner", 0.0, min=0.0)
-    has_base = "reflectance" in s.params
-    if transmission and (k_inner > 0.0 or has_base):
-        raise SceneError('thinfilm: "transmission" needs a clear substrate (no "k_inner", no "reflectance")',
-                         s.loc)
-    return [
-        s.float("eta_outer", 1.0, lo=1.0e-3),
-        s.float("eta_film", 1.55, lo=1.0e-3),
-        s.float("eta_inner", 1.66, lo=1.0e-3),
-        s.const(k_inner),
-        s.float("thickness", 500.0, lo=0.0),
-        s.float("thicknessmap", 0.0),
-        s.const(s.params.float("thicknessscale", 1.0)),
-        s.const(1.0 if transmission else 0.0),
-        s.rgb("reflectance", 0.0, lo=0.0, hi=1.0),
-    ]
+def resolve(values: dict[str, Any], loc: Location | None) -> tuple[dict[str, Any], int]:
+    """Refraction needs a substrate light can cross: no absorption and no diffuse base."""
+    if values.get("transmission") and (values.get("k_inner", 0.0) > 0.0 or "reflectance" in values):
+        raise SceneError('thinfilm: "transmission" needs a clear substrate (no "k_inner", no "reflectance")', loc)
+    return values, 0
 
 
 @wp.func
 def _transmissive(b: BSDF) -> bool:
-    return b.p[TRANSMISSION][0] > 0.5
+    return (b.flags & FLAG.transmission) != 0
 
 
 @wp.func
@@ -72,13 +69,13 @@ def film_reflect_transmit(b: BSDF, w: wp.vec3):
     R + T is not clipped. With rgb3 it is 1 to float precision for lossless media; with
     spectral:N it is the jittered estimate of white, 1 ± 1e-3 at N = 32 and exactly 1 on average,
     so clipping the sum would bias every image darker (about 0.3 % in a glass-sphere furnace)."""
-    n0 = b.p[ETA_OUTER][0]
-    n2 = wp.vec2(b.p[ETA_INNER][0], b.p[K_INNER][0])
+    n0 = b.p[SLOT.eta_outer][0]
+    n2 = wp.vec2(b.p[SLOT.eta_inner][0], b.p[SLOT.k_inner][0])
     if w[2] < 0.0 and _transmissive(b):
-        n0 = b.p[ETA_INNER][0]
-        n2 = wp.vec2(b.p[ETA_OUTER][0], 0.0)
-    n1 = wp.vec2(b.p[ETA_FILM][0], 0.0)
-    d = wp.max(b.p[THICKNESS][0] + b.p[THICKNESS_SCALE][0] * b.p[THICKNESS_MAP][0], 0.0)
+        n0 = b.p[SLOT.eta_inner][0]
+        n2 = wp.vec2(b.p[SLOT.eta_outer][0], 0.0)
+    n1 = wp.vec2(b.p[SLOT.eta_film][0], 0.0)
+    d = wp.max(b.p[SLOT.thickness][0] + b.p[SLOT.thicknessscale][0] * b.p[SLOT.thicknessmap][0], 0.0)
     cos0 = wp.abs(w[2])
     r = wp.vec3(0.0)
     t = wp.vec3(0.0)
@@ -101,29 +98,26 @@ def _mean(v: wp.vec3) -> float:
 @wp.func
 def _base_lobe(b: BSDF, r_o: wp.vec3) -> wp.vec3:
     """reflectance (1 − R(wo)): the substrate's share before the exit through the film."""
-    return wp.cw_mul(b.p[BASE], wp.vec3(1.0) - r_o)
+    return wp.cw_mul(b.p[SLOT.reflectance], wp.vec3(1.0) - r_o)
 
 
 @wp.func
-def pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> float:
-    """The substrate lobe's density: its selection probability in ``sample`` times cos/π."""
-    if _transmissive(b) or max3(b.p[BASE]) <= 0.0 or not same_hemisphere(wo, wi):
-        return 0.0
-    r, t = film_reflect_transmit(b, wo)
-    p_base = _mean(_base_lobe(b, r))
-    total = _mean(r) + _mean(t) + p_base
-    if total <= 0.0:
-        return 0.0
-    return p_base / total * wp.abs(wi[2]) * INV_PI
-
-
-@wp.func
-def eval(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> wp.vec3:
-    if _transmissive(b) or max3(b.p[BASE]) <= 0.0 or not same_hemisphere(wo, wi):
-        return wp.vec3(0.0)
+def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+    """The substrate lobe (the delta lobes have no value or density here): f from the film at wo
+    and at wi, the density its selection probability in ``sample`` times cos/π. The film at wo
+    is evaluated once for both."""
+    e = BSDFEval()
+    if _transmissive(b) or max3(b.p[SLOT.reflectance]) <= 0.0 or not same_hemisphere(wo, wi):
+        return e
     r_o, t_o = film_reflect_transmit(b, wo)
     r_i, t_i = film_reflect_transmit(b, wi)
-    return wp.cw_mul(_base_lobe(b, r_o), wp.vec3(1.0) - r_i) * INV_PI
+    base = _base_lobe(b, r_o)
+    e.f = wp.cw_mul(base, wp.vec3(1.0) - r_i) * INV_PI
+    p_base = _mean(base)
+    total = _mean(r_o) + _mean(t_o) + p_base
+    if total > 0.0:
+        e.pdf = p_base / total * wp.abs(wi[2]) * INV_PI
+    return e
 
 
 @wp.func
@@ -138,32 +132,26 @@ def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
         return failed_sample()
     p_r = p_r / total
     p_t = p_t / total
-    s = BSDFSample()
     if u[2] < p_r:
-        s.wi = reflect_z(wo)
-        s.weight = r / p_r
-        s.pdf = p_r
-        s.specular = True
-        return s
+        return delta_sample(reflect_z(wo), r / p_r, p_r, REFLECTION | SPECULAR)
     if u[2] < p_r + p_t:
-        refr = refract(wo, wp.vec3(0.0, 0.0, 1.0), b.p[ETA_INNER][0] / b.p[ETA_OUTER][0])
+        refr = refract(wo, wp.vec3(0.0, 0.0, 1.0), b.p[SLOT.eta_inner][0] / b.p[SLOT.eta_outer][0])
         if refr[3] == 0.0:
             return failed_sample()
-        s.wi = wp.vec3(refr[0], refr[1], refr[2])
-        s.weight = t / (p_t * refr[3] * refr[3])
-        s.pdf = p_t
+        s = delta_sample(wp.vec3(refr[0], refr[1], refr[2]), t / (p_t * refr[3] * refr[3]), p_t,
+                         TRANSMISSION | SPECULAR)
         s.eta = refr[3]
-        s.specular = True
         return s
     wi = cosine_hemisphere(wp.vec2(u[0], u[1]))
     if wo[2] < 0.0:
         wi = wp.vec3(wi[0], wi[1], -wi[2])
     p_base = _mean(base) / total
+    s = BSDFSample()
     s.pdf = p_base * wp.abs(wi[2]) * INV_PI
     if s.pdf <= 0.0:
         return failed_sample()
     r_i, t_i = film_reflect_transmit(b, wi)
     s.wi = wi
     s.weight = wp.cw_mul(base, wp.vec3(1.0) - r_i) / p_base
-    s.specular = False
+    s.flags = REFLECTION | DIFFUSE
     return s

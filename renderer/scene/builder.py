@@ -8,125 +8,31 @@ one written acts first on the geometry. At ``Camera`` the CTM is camera-from-wor
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Callable, Iterable
 
 import numpy as np
 
-from renderer.errors import Location, MissingFileError, SceneError
-from renderer.scene.description import (AreaLightDesc, CameraDesc, DistantLightDesc, FilmDesc, InfiniteLightDesc,
-                                        InstanceSetDesc, IntegratorDesc, MaterialDesc, MeshDesc, SamplerDesc,
+from renderer import lights, materials
+from renderer.errors import Location, SceneError, SceneErrors, UnsupportedError
+from renderer.scene.description import (CameraDesc, FilmDesc, InstanceSetDesc, IntegratorDesc, MeshDesc, SamplerDesc,
                                         SceneDescription, ShapeDesc, TextureDesc)
-from renderer.scene.params import Param, ParamSet
+from renderer.scene.params import ParamSet
 from renderer.scene.parser import Directive
 from renderer.scene.plymesh import ply_mesh
 from renderer.scene.shapes import bilinear_mesh, disk, sphere, triangle_mesh
-from renderer.scene.transform import (from_pbrt_matrix, inverse, look_at, rotate, scale, swaps_handedness,
-                                      transformed_mesh, translate)
-
-#: pbrt-v4 features this renderer does not implement. "warn": ignored with a located warning,
-#: because the picture stays essentially right; "error": refused, because ignoring them would
-#: change the picture badly. ``"*"`` stands for any name not listed (or for a directive without
-#: a name). Parameters of supported directives that are not implemented (or misspelt) always warn.
-UNSUPPORTED: dict[tuple[str, str], tuple[str, str]] = {
-    ("Camera", "orthographic"): ("error", "only the perspective camera is implemented"),
-    ("Camera", "realistic"): ("error", "only the perspective camera is implemented"),
-    ("Camera", "spherical"): ("error", "only the perspective camera is implemented"),
-    ("Shape", "curve"): ("error", "curves are not implemented"),
-    ("Shape", "cylinder"): ("error", "cylinders are not implemented"),
-    ("Shape", "loopsubdiv"): ("error", "subdivision surfaces are not implemented"),
-    ("LightSource", "point"): ("error", "only infinite, distant and area lights are implemented"),
-    ("LightSource", "spot"): ("error", "only infinite, distant and area lights are implemented"),
-    ("LightSource", "goniometric"): ("error", "only infinite, distant and area lights are implemented"),
-    ("LightSource", "projection"): ("error", "only infinite, distant and area lights are implemented"),
-    ("Material", "measured"): ("error", "measured BSDFs are not implemented"),
-    ("MediumInterface", "*"): ("error", "participating media are not implemented"),
-    ("MakeNamedMedium", "*"): ("warn", "participating media are not implemented; the medium is ignored "
-                                       "(using it in a MediumInterface is an error)"),
-    ("Film", "gbuffer"): ("warn", 'rendered as an "rgb" film'),
-    ("Film", "spectral"): ("warn", 'rendered as an "rgb" film'),
-    ("Sampler", "*"): ("warn", "rendered with the independent sampler (low-discrepancy samplers are not implemented)"),
-    ("Integrator", "*"): ("warn", 'rendered with the "path" integrator'),
-    ("PixelFilter", "*"): ("warn", "pixel filters are not implemented; samples are box-filtered"),
-    ("Accelerator", "*"): ("warn", "the BVH is this renderer's own"),
-    ("Attribute", "*"): ("warn", "default parameters set by Attribute are ignored"),
-    ("ColorSpace", "*"): ("warn", "colours are always linear sRGB"),
-    ("Option", "*"): ("warn", "options are ignored"),
-    ("ActiveTransform", "*"): ("warn", "motion blur is not implemented; the shutter-open transforms are used"),
-    ("TransformTimes", "*"): ("warn", "motion blur is not implemented; the shutter-open transforms are used"),
-    ("WorldEnd", "*"): ("warn", "a pbrt-v3 directive; ignored"),
-}
-
-#: The names pbrt-v4 knows for each kind of object; a name outside these is an error.
-KNOWN_NAMES: dict[str, frozenset[str]] = {
-    "Camera": frozenset({"perspective", "orthographic", "realistic", "spherical"}),
-    "Film": frozenset({"rgb", "gbuffer", "spectral"}),
-    "Sampler": frozenset({"independent", "sobol", "zsobol", "halton", "pmj02bn", "paddedsobol", "stratified"}),
-    "Integrator": frozenset({"path", "volpath", "ambientocclusion", "bdpt", "lightpath", "mlt", "randomwalk",
-                             "simplepath", "simplevolpath", "sppm", "aov"}),
-    "PixelFilter": frozenset({"box", "gaussian", "mitchell", "sinc", "triangle"}),
-    "Accelerator": frozenset({"bvh", "kdtree"}),
-    "Shape": frozenset({"trianglemesh", "plymesh", "sphere", "disk", "bilinearmesh", "curve", "cylinder",
-                        "loopsubdiv"}),
-    "LightSource": frozenset({"infinite", "distant", "point", "spot", "goniometric", "projection"}),
-    "AreaLightSource": frozenset({"diffuse"}),
-}
+from renderer.scene.state import GraphicsState, ObjectDefinition, SavedState
+from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, UNSUPPORTED, WORLD_ONLY
+from renderer.scene.texture_params import read_texture
+from renderer.scene.transform import (from_pbrt_matrix, inverse, look_at, read_instance_transforms, rotate, scale,
+                                      swaps_handedness, transformed_mesh, translate)
 
 #: Shapes we build, each from its parameters and the Shape directive's location.
 SHAPES: dict[str, Callable[[ParamSet, Location], MeshDesc]] = {
     "trianglemesh": triangle_mesh, "plymesh": ply_mesh, "sphere": sphere, "disk": disk,
     "bilinearmesh": bilinear_mesh,
 }
-
-#: As in pbrt-v4: rendering options come before WorldBegin, scene contents after it.
-OPTIONS_ONLY = frozenset({"Camera", "Film", "Sampler", "Integrator", "PixelFilter", "Accelerator"})
-WORLD_ONLY = frozenset({"AttributeBegin", "AttributeEnd", "Attribute", "Shape", "ReverseOrientation", "ObjectBegin",
-                        "ObjectEnd", "ObjectInstance", "LightSource", "AreaLightSource", "Material",
-                        "MakeNamedMaterial", "NamedMaterial", "Texture"})
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-# --- graphics state ----------------------------------------------------------------------------
-
-@dataclass
-class GraphicsState:
-    """What AttributeBegin saves and AttributeEnd restores."""
-
-    ctm: np.ndarray = field(default_factory=lambda: np.eye(4))
-    reverse_orientation: bool = False
-    material: int | None = None          # None: the default diffuse material
-    area_light: AreaLightDesc | None = None
-    shutter_open_active: bool = True     # False after "ActiveTransform EndTime": transforms are skipped
-
-
-@dataclass
-class _Saved:
-    kind: str                            # "AttributeBegin", "TransformBegin" or "ObjectBegin"
-    state: GraphicsState
-    loc: Location
-
-
-@dataclass
-class _Object:
-    """An ObjectBegin/ObjectEnd definition: its shapes, with meshes stored relative to ``ctm``."""
-
-    ctm: np.ndarray                      # the CTM at ObjectBegin
-    loc: Location
-    shapes: list[int] = field(default_factory=list)
-    mirrored: list[int] | None = None    # the same shapes with orientation flipped, made on demand
 
 
 class Builder:
@@ -137,33 +43,56 @@ class Builder:
         self.source = source             # the top-level file, for errors that belong to no line
         self.scene = SceneDescription(camera=CameraDesc(camera_to_world=np.eye(4)))
         self.state = GraphicsState()
-        self.saved: list[_Saved] = []
+        self.saved: list[SavedState] = []
         self.named_coordinate_systems: dict[str, np.ndarray] = {}
         self.named_materials: dict[str, int] = {}
-        self.objects: dict[str, _Object] = {}
-        self.current_object: _Object | None = None
+        self.objects: dict[str, ObjectDefinition] = {}
+        self.current_object: ObjectDefinition | None = None
         self.default_material: int | None = None
         self.world_begun = False
 
     # -- driver
 
     def build(self, directives: Iterable[Directive]) -> SceneDescription:
-        for d in directives:
-            if self.world_begun and d.name in OPTIONS_ONLY:
-                raise SceneError(f"{d.name} must come before WorldBegin", d.loc)
-            if not self.world_begun and d.name in WORLD_ONLY:
-                raise SceneError(f"{d.name} must come after WorldBegin", d.loc)
-            handler = getattr(self, d.name, None)
-            if handler is None:                  # a directive we only warn about (UNSUPPORTED)
-                self.unsupported(d.name, "*", d.loc)
-            else:
-                handler(d)
+        """Every directive in order. An unsupported type does not stop the build: all of them are
+        reported together at the end (with any error that follows from them), each with file:line."""
+        refused: list[SceneError] = []
+        try:
+            for d in directives:
+                try:
+                    self._directive(d)
+                except UnsupportedError as e:
+                    refused.append(e)
+            self._finish()
+        except SceneError as e:
+            if not refused:
+                raise
+            refused.append(e)
+        if len(refused) == 1:
+            raise refused[0]
+        if refused:
+            raise SceneErrors(refused)
+        return self.scene
+
+    def _directive(self, d: Directive) -> None:
+        if self.world_begun and d.name in OPTIONS_ONLY:
+            raise SceneError(f"{d.name} must come before WorldBegin", d.loc)
+        if not self.world_begun and d.name in WORLD_ONLY:
+            raise SceneError(f"{d.name} must come after WorldBegin", d.loc)
+        handler = getattr(self, d.name, None)
+        if handler is None:                  # a directive we only warn about (UNSUPPORTED)
+            self.unsupported(d.name, "*", d.loc)
+        else:
+            handler(d)
+
+    def _finish(self) -> None:
         if not self.world_begun:
             raise SceneError(f"{self.source}: no WorldBegin, so the file describes no scene", None)
         if self.saved:
             s = self.saved[-1]
             raise SceneError(f"{s.kind} is never closed", s.loc)
-        return self.scene
+        if not lights.has_lights(self.scene):
+            self.scene.warnings.append(f"{self.source}: scene has no lights: the image will be black")
 
     # -- reporting
 
@@ -175,7 +104,7 @@ class Builder:
         action, reason = UNSUPPORTED.get((directive, name)) or UNSUPPORTED[(directive, "*")]
         what = f'{directive} "{name}"' if name != "*" else directive
         if action == "error":
-            raise SceneError(f"{what} is not supported: {reason}", loc)
+            raise UnsupportedError(f"{what} is not supported: {reason}", loc)
         self.warn(loc, f"{what}: {reason}")
 
     def check_known(self, d: Directive) -> str:
@@ -307,9 +236,9 @@ class Builder:
     # -- blocks
 
     def _push(self, d: Directive) -> None:
-        self.saved.append(_Saved(d.name, replace(self.state), d.loc))
+        self.saved.append(SavedState(d.name, replace(self.state), d.loc))
 
-    def _pop(self, d: Directive, opened_by: str) -> _Saved:
+    def _pop(self, d: Directive, opened_by: str) -> SavedState:
         if not self.saved:
             raise SceneError(f"{d.name} without a matching {opened_by}", d.loc)
         top = self.saved[-1]
@@ -336,11 +265,13 @@ class Builder:
     # -- materials and textures
 
     def _add_material(self, kind: str, params: ParamSet, loc: Location, name: str = "") -> int:
-        """Material parameters are left unmarked: the device stage validates them per material."""
+        """Parameters are read, typed and range-checked by the material's declaration, here, so
+        every error and warning names its file and line; what it does not declare is warned about."""
         if kind == "measured":
             self.unsupported("Material", kind, loc)
-        kind = "interface" if kind in ("", "none", "interface") else kind
-        self.scene.materials.append(MaterialDesc(kind, params, loc, name))
+        self.scene.materials.append(materials.from_pbrt(kind, params, loc, name))
+        for p in params.unused():
+            self.warn(p.loc, f'parameter "{p.name}" of material "{kind}" is not supported and was ignored')
         return len(self.scene.materials) - 1
 
     def Material(self, d: Directive) -> None:
@@ -366,9 +297,8 @@ class Builder:
         if self.state.material is not None:
             return self.state.material
         if self.default_material is None:
-            params = ParamSet(loc=loc)
-            params.add(Param("rgb", "reflectance", [0.5, 0.5, 0.5], loc))
-            self.default_material = self._add_material("diffuse", params, loc, "default")
+            self.scene.materials.append(materials.material("diffuse", name="default", loc=loc))
+            self.default_material = len(self.scene.materials) - 1
         return self.default_material
 
     def Texture(self, d: Directive) -> None:
@@ -377,54 +307,22 @@ class Builder:
             raise SceneError(f'Texture "{name}": type must be "float" or "spectrum", not "{value_type}"', d.loc)
         if name in self.scene.textures:
             raise SceneError(f'texture "{name}" is defined twice (first at {self.scene.textures[name].loc})', d.loc)
-        self.scene.textures[name] = TextureDesc(name, value_type, kind, d.params, Path(d.loc.file).parent, d.loc)
+        desc = TextureDesc(name, value_type, kind, d.params, Path(d.loc.file).parent, d.loc)
+        spec = read_texture(desc)
+        if spec.base is not None and spec.base not in self.scene.textures:
+            raise SceneError(f'Texture "{name}": no texture named "{spec.base}" is defined before it', d.loc)
+        self.warn_unused(d)
+        self.scene.textures[name] = desc
 
-    # -- lights
+    # -- lights: each light module reads its own parameters (renderer.lights)
 
     def AreaLightSource(self, d: Directive) -> None:
-        self.check_known(d)
-        p = d.params
-        L = p.rgb("L", [1.0, 1.0, 1.0]) * p.float("scale", 1.0)
-        self.state.area_light = AreaLightDesc(L, p.bool("twosided", False), d.loc)
+        self.state.area_light = lights.describe(d.name, str(d.args[0]), d.params, self.state.ctm, d.loc)
         self.warn_unused(d)
 
     def LightSource(self, d: Directive) -> None:
-        name = self.check_known(d)
-        if name == "infinite":
-            self.scene.infinite_lights.append(self._infinite(d))
-        elif name == "distant":
-            self.scene.distant_lights.append(self._distant(d))
-        else:
-            self.unsupported(d.name, name, d.loc)
+        self.scene.lights.append(lights.describe(d.name, str(d.args[0]), d.params, self.state.ctm, d.loc))
         self.warn_unused(d)
-
-    def _infinite(self, d: Directive) -> InfiniteLightDesc:
-        p = d.params
-        filename = p.string("filename")
-        L = p.rgb("L")
-        if filename is not None and L is not None:
-            raise SceneError('LightSource "infinite": give either "L" or "filename", not both', d.loc)
-        path = None
-        if filename is not None:
-            path = Path(d.loc.file).parent / filename
-            if not path.is_file():
-                raise MissingFileError(path, d.loc, "environment image")
-        L = (np.ones(3) if L is None else L) * p.float("scale", 1.0)
-        return InfiniteLightDesc(self.state.ctm.copy(), L, path, d.loc)
-
-    def _distant(self, d: Directive) -> DistantLightDesc:
-        p = d.params
-        src = p.floats("from", ("point3",))
-        dst = p.floats("to", ("point3",))
-        src = np.zeros(3) if src is None else src
-        dst = np.array([0.0, 0.0, 1.0]) if dst is None else dst
-        if src.size != 3 or dst.size != 3:
-            raise SceneError('LightSource "distant": "from" and "to" take one point each', d.loc)
-        w = self.state.ctm[:3, :3] @ (src - dst)
-        if not np.linalg.norm(w) > 0.0:
-            raise SceneError('LightSource "distant": "from" and "to" give no direction', d.loc)
-        L = p.rgb("L", [1.0, 1.0, 1.0]) * p.float("scale", 1.0)
-        return DistantLightDesc(w / np.linalg.norm(w), L, p.float("angularradius", 0.0, min=0.0, max=90.0), d.loc)
 
     # -- shapes and objects
 
@@ -465,7 +363,7 @@ class Builder:
         if name in self.objects:
             raise SceneError(f'object "{name}" is defined twice (first at {self.objects[name].loc})', d.loc)
         self._push(d)
-        self.current_object = self.objects[name] = _Object(self.state.ctm, d.loc)
+        self.current_object = self.objects[name] = ObjectDefinition(self.state.ctm, d.loc)
 
     def ObjectEnd(self, d: Directive) -> None:
         if self.current_object is None:
@@ -500,7 +398,7 @@ class Builder:
                 shapes = self._mirrored_shapes(obj) if flip else obj.shapes
                 self.scene.instance_sets.append(InstanceSetDesc(list(shapes), group @ obj.ctm, d.loc))
 
-    def _mirrored_shapes(self, obj: _Object) -> list[int]:
+    def _mirrored_shapes(self, obj: ObjectDefinition) -> list[int]:
         if obj.mirrored is None:
             obj.mirrored = []
             for i in obj.shapes:
@@ -515,26 +413,6 @@ class Builder:
         ctm = self.state.ctm
         if name is None:
             return ctm[None].copy()
-        path = Path(d.loc.file).parent / name
-        if not path.is_file():
-            raise MissingFileError(path, d.loc, "instance transforms")
-        try:
-            data = np.load(path, allow_pickle=False)
-            if isinstance(data, np.ndarray):             # .npy: the array itself
-                T = data
-            else:                                        # .npz: the array named "transforms"
-                with data:
-                    if "transforms" not in data.files:
-                        raise SceneError(f'{path}: no array named "transforms" (has {", ".join(data.files)})',
-                                         d.loc)
-                    T = data["transforms"]
-            T = np.asarray(T, dtype=np.float64)
-        except (OSError, ValueError) as e:
-            raise SceneError(f"{path}: cannot read instance transforms ({e})", d.loc) from e
-        if T.ndim != 3 or T.shape[1:] != (4, 4):
-            raise SceneError(f"{path}: instance transforms must have shape (N, 4, 4), not {T.shape}", d.loc)
-        if not np.all(np.isfinite(T)):
-            raise SceneError(f"{path}: instance transforms contain NaN or infinite values", d.loc)
-        return ctm @ T
+        return ctm @ read_instance_transforms(Path(d.loc.file).parent / name, d.loc)
 
 

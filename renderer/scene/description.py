@@ -1,18 +1,26 @@
 """The scene as plain Python: what the parser and builder produce and the device upload consumes.
 
-Units and defaults are resolved here; nothing in this module knows about Warp. Materials and
-textures keep their :class:`ParamSet` because each material module validates its own parameters
-when the scene is uploaded (adding a material touches only that module).
+Units and defaults are resolved here; nothing in this module knows about Warp. Materials hold
+plain values, validated against their module's declared parameters when they are made
+(:func:`renderer.materials.material`, or the builder from a pbrt file); textures still keep their
+:class:`ParamSet`.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Union
 
 import numpy as np
 
 from renderer.errors import Location
 from renderer.scene.params import ParamSet
+
+if TYPE_CHECKING:
+    from renderer.parameters import TextureRef
+
+#: A material parameter's value: a float, an RGB triple, a bool, or a texture bound by name.
+MaterialValue = Union[float, tuple, bool, "TextureRef"]
 
 
 @dataclass
@@ -68,16 +76,22 @@ class TextureDesc:
 
 @dataclass
 class MaterialDesc:
+    """Build with :func:`renderer.materials.material`, which validates the values."""
+
     kind: str                            # "diffuse", "dielectric", "conductor", ...
-    params: ParamSet
-    loc: Location
+    values: dict[str, MaterialValue]     # the parameters given (defaults apply to the rest)
+    loc: Location | None = None
     name: str = ""
 
 
 @dataclass
-class AreaLightDesc:
-    L: np.ndarray                        # (3,) linear sRGB radiance, scale applied
-    two_sided: bool = False
+class LightDesc:
+    """A light: its type and plain parameter values. Build with :func:`renderer.lights.light`,
+    which validates them against the light's declared parameters and fills in the defaults."""
+
+    kind: str                            # a renderer.lights.REGISTRY name: "infinite", "distant", "point", ...
+    values: dict[str, Any]               # every declared parameter (None: an optional one not given)
+    light_to_world: np.ndarray = field(default_factory=lambda: np.eye(4))   # (4, 4): the CTM at the light
     loc: Location | None = None
 
 
@@ -87,7 +101,7 @@ class ShapeDesc:
 
     mesh: int                            # index into SceneDescription.meshes
     material: int                        # index into SceneDescription.materials
-    area_light: AreaLightDesc | None = None
+    area_light: LightDesc | None = None  # an area light ("diffuse") that every instance emits
     reverse_orientation: bool = False
     loc: Location | None = None
 
@@ -102,22 +116,6 @@ class InstanceSetDesc:
 
 
 @dataclass
-class InfiniteLightDesc:
-    light_to_world: np.ndarray           # (4, 4)
-    L: np.ndarray                        # (3,) constant radiance (scale applied); multiplies the image
-    filename: Path | None = None         # image: square = pbrt-v4 equal-area, 2:1 = lat-long
-    loc: Location | None = None
-
-
-@dataclass
-class DistantLightDesc:
-    direction: np.ndarray                # (3,) unit vector from the scene *towards* the light, world space
-    L: np.ndarray                        # (3,) radiance-scaled irradiance, scale applied
-    angular_radius_deg: float = 0.0      # > 0 makes a soft sun (uniform cone)
-    loc: Location | None = None
-
-
-@dataclass
 class SceneDescription:
     camera: CameraDesc
     film: FilmDesc = field(default_factory=FilmDesc)
@@ -128,7 +126,6 @@ class SceneDescription:
     textures: dict[str, TextureDesc] = field(default_factory=dict)
     shapes: list[ShapeDesc] = field(default_factory=list)
     instance_sets: list[InstanceSetDesc] = field(default_factory=list)
-    infinite_lights: list[InfiniteLightDesc] = field(default_factory=list)
-    distant_lights: list[DistantLightDesc] = field(default_factory=list)
+    lights: list[LightDesc] = field(default_factory=list)        # LightSource lights, in file order
     warnings: list[str] = field(default_factory=list)
     path: Path | None = None

@@ -110,13 +110,19 @@ def disk(params: ParamSet, loc: Location) -> MeshDesc:
     return validated_mesh(*_grid(P, N, np.stack([u, v], -1)), loc, "disk")
 
 
+def _indices(params: ParamSet, loc: Location, shape: str, n_points: int, corners: int) -> np.ndarray:
+    """``indices``, which pbrt lets a single polygon (exactly ``corners`` vertices) leave out."""
+    idx = params.ints("indices")
+    if idx is None:
+        if n_points != corners:
+            raise SceneError(f'{shape}: "indices" is required unless there are exactly {corners} vertices', loc)
+        idx = np.arange(corners)
+    return idx
+
+
 def triangle_mesh(params: ParamSet, loc: Location) -> MeshDesc:
     P = _points(params, loc, "trianglemesh")
-    F = params.ints("indices")
-    if F is None:
-        if len(P) != 3:
-            raise SceneError('trianglemesh: "indices" is required unless there are exactly 3 vertices', loc)
-        F = np.arange(3)
+    F = _indices(params, loc, "trianglemesh", len(P), 3)
     return validated_mesh(P, F, params.floats("N", ("normal3",)), _uvs(params), loc, "trianglemesh")
 
 
@@ -124,11 +130,7 @@ def bilinear_mesh(params: ParamSet, loc: Location) -> MeshDesc:
     """Bilinear patches p(u, v) = lerp(v, lerp(u, p00, p10), lerp(u, p01, p11)) with corners given as
     indices[4i..4i+3] = p00, p10, p01, p11. Planar patches become two triangles, others a grid."""
     P = _points(params, loc, "bilinearmesh")
-    Q = params.ints("indices")
-    if Q is None:
-        if len(P) != 4:
-            raise SceneError('bilinearmesh: "indices" is required unless there are exactly 4 vertices', loc)
-        Q = np.arange(4)
+    Q = _indices(params, loc, "bilinearmesh", len(P), 4)
     if Q.size % 4:
         raise SceneError(f"bilinearmesh: {Q.size} indices is not a multiple of 4", loc)
     if Q.size and (Q.min() < 0 or Q.max() >= len(P)):

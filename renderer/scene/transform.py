@@ -7,10 +7,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 
-from renderer.errors import Location, SceneError
+from renderer.errors import Location, MissingFileError, SceneError
 from renderer.scene.description import MeshDesc
 
 
@@ -95,3 +96,28 @@ def transformed_mesh(mesh: MeshDesc, m: np.ndarray) -> MeshDesc:
         n = mesh.normals.astype(np.float64) @ np.linalg.inv(a)
         N = (n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)).astype(np.float32)
     return replace(mesh, positions=P, normals=N)
+
+
+def read_instance_transforms(path: Path, loc: Location) -> np.ndarray:
+    """(N, 4, 4) instance matrices from a ``.npy`` (the array itself) or ``.npz`` (its array
+    ``transforms``) file: our extension for placing many instances of one object."""
+    if not path.is_file():
+        raise MissingFileError(path, loc, "instance transforms")
+    try:
+        data = np.load(path, allow_pickle=False)
+        if isinstance(data, np.ndarray):             # .npy: the array itself
+            T = data
+        else:                                        # .npz: the array named "transforms"
+            with data:
+                if "transforms" not in data.files:
+                    raise SceneError(f'{path}: no array named "transforms" (has {", ".join(data.files)})',
+                                     loc)
+                T = data["transforms"]
+        T = np.asarray(T, dtype=np.float64)
+    except (OSError, ValueError) as e:
+        raise SceneError(f"{path}: cannot read instance transforms ({e})", loc) from e
+    if T.ndim != 3 or T.shape[1:] != (4, 4):
+        raise SceneError(f"{path}: instance transforms must have shape (N, 4, 4), not {T.shape}", loc)
+    if not np.all(np.isfinite(T)):
+        raise SceneError(f"{path}: instance transforms contain NaN or infinite values", loc)
+    return T

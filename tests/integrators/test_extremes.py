@@ -16,9 +16,12 @@ import trimesh
 
 import renderer
 from renderer.api import RenderStats
-from renderer.scene.description import (CameraDesc, DistantLightDesc, FilmDesc, InfiniteLightDesc, InstanceSetDesc,
-                                        MaterialDesc, MeshDesc, SamplerDesc, SceneDescription, ShapeDesc)
-from scenes_py import HERE, look_at, params, single_object_scene
+from renderer.lights import light
+from renderer.materials import material
+from renderer.scene.description import (CameraDesc, FilmDesc, InstanceSetDesc, MaterialDesc, MeshDesc, SamplerDesc,
+                                        SceneDescription, ShapeDesc)
+from renderer.scene.transform import world_from_camera
+from scenes_py import single_object_scene
 
 RHO = 0.5
 
@@ -26,7 +29,7 @@ RHO = 0.5
 def scene(meshes_materials, eye, target, up=(0, 1, 0), fov=40.0, res=16, sky: float | None = 1.0,
           sun=None, max_depth=5) -> SceneDescription:
     """Meshes (each with its own material) seen from ``eye``; an optional uniform sky and distant light."""
-    desc = SceneDescription(camera=CameraDesc(camera_to_world=look_at(eye, target, up), fov_deg=fov),
+    desc = SceneDescription(camera=CameraDesc(camera_to_world=world_from_camera(eye, target, up), fov_deg=fov),
                             film=FilmDesc(width=res, height=res), sampler=SamplerDesc(spp=16, seed=1))
     desc.integrator.max_depth = max_depth
     for i, (mesh, mat) in enumerate(meshes_materials):
@@ -35,15 +38,15 @@ def scene(meshes_materials, eye, target, up=(0, 1, 0), fov=40.0, res=16, sky: fl
         desc.shapes.append(ShapeDesc(mesh=i, material=i))
         desc.instance_sets.append(InstanceSetDesc(shapes=[i], transforms=np.eye(4)[None]))
     if sky is not None:
-        desc.infinite_lights.append(InfiniteLightDesc(light_to_world=np.eye(4), L=np.full(3, sky)))
+        desc.lights.append(light("infinite", L=sky))
     if sun is not None:
         d, E = sun
-        desc.distant_lights.append(DistantLightDesc(direction=np.asarray(d, float) / np.linalg.norm(d), L=np.full(3, E)))
+        desc.lights.append(light("distant", L=E, from_=d, to=(0, 0, 0)))
     return desc
 
 
 def diffuse(rho=RHO) -> MaterialDesc:
-    return MaterialDesc("diffuse", params(reflectance=(rho, rho, rho)), HERE)
+    return material("diffuse", reflectance=(rho, rho, rho))
 
 
 def ground(half: float = 500.0, y: float = 0.0) -> MeshDesc:
@@ -134,7 +137,7 @@ def test_total_internal_reflection_in_a_glass_slab():
     reflection for ever: 0 once max_depth ends it. Nothing exceeds eta^2 and nothing is NaN."""
     slab = trimesh.creation.box(extents=(20.0, 0.2, 20.0))
     mesh = MeshDesc(positions=slab.vertices.astype(np.float32), indices=slab.faces.astype(np.int32))
-    desc = scene([(mesh, MaterialDesc("dielectric", params(eta=1.5), HERE))], eye=(0, 0, 0), target=(0, 1, 0),
+    desc = scene([(mesh, material("dielectric", eta=1.5))], eye=(0, 0, 0), target=(0, 1, 0),
                  up=(0, 0, 1), fov=100, max_depth=24)
     img = render(desc, spp=16)
     assert img.max() <= 2.25 * (1 + 1e-5)
@@ -150,8 +153,8 @@ def test_total_internal_reflection_in_a_glass_slab():
 def test_camera_inside_glass_sphere_at_grazing_angles():
     """Camera just inside a glass sphere looking along the surface: rays meet it beyond the
     critical angle and circle inside (whispering gallery). Bounded by eta^2, finite, no NaN."""
-    desc = single_object_scene(MaterialDesc("dielectric", params(eta=1.5), HERE), sky=1.0, fov=60)
-    desc.camera.camera_to_world = look_at((0, 0.95, 0), (1, 0.95, 0), (0, 1, 0))
+    desc = single_object_scene(material("dielectric", eta=1.5), sky=1.0, fov=60)
+    desc.camera.camera_to_world = world_from_camera((0, 0.95, 0), (1, 0.95, 0), (0, 1, 0))
     desc.integrator.max_depth = 32
     img = render(desc, spp=16)
     assert img.max() <= 2.25 * (1 + 1e-5)
@@ -164,9 +167,9 @@ def test_index_of_one_is_invisible(tmp_path):
     the background's. The background is an environment image (not uniform), rendered once with
     the sphere and once with it moved behind the camera."""
     env = _env_image(32, lambda th, ph: 0.2 + np.cos(th) ** 2 + 0.5 * (np.sin(3 * ph) > 0), tmp=tmp_path)
-    mat = MaterialDesc("dielectric", params(eta=1.0), HERE)
+    mat = material("dielectric", eta=1.0)
     desc = single_object_scene(mat, sky=1.0)
-    desc.infinite_lights[0].filename = env
+    desc.lights[0] = light("infinite", filename=env)
     with_sphere = render(desc, spp=4)
     behind = np.eye(4)
     behind[2, 3] = -100.0                                          # far behind the camera
@@ -182,7 +185,7 @@ def test_index_of_one_is_invisible(tmp_path):
 def test_dielectric_index_extremes_conserve_energy(eta):
     """A smooth sphere of eta 1.0001 or 4 (R = 0.36 at normal incidence, critical angle 14.5
     degrees) in a uniform sky: every escaping path carries exactly 1 (1/eta^2 in, eta^2 out)."""
-    desc = single_object_scene(MaterialDesc("dielectric", params(eta=eta), HERE))
+    desc = single_object_scene(material("dielectric", eta=eta))
     desc.integrator.max_depth = 64
     img = render(desc, spp=16)
     assert img.max() <= 1.0 + 1e-5
@@ -194,8 +197,7 @@ def test_dielectric_index_extremes_conserve_energy(eta):
 def test_rough_dielectric_extremes_bounded(roughness, eta):
     """Roughness 0 and 1 (alpha 1, no remapping) at eta 1.5 and 4: finite, and a single-scattering
     microfacet dielectric can only lose energy in a white furnace."""
-    desc = single_object_scene(MaterialDesc("dielectric", params(eta=eta, roughness=roughness,
-                                                                 remaproughness=False), HERE))
+    desc = single_object_scene(material("dielectric", eta=eta, roughness=roughness, remaproughness=False))
     desc.integrator.max_depth = 32
     img = render(desc, spp=32)
     h = img.shape[0]
@@ -209,8 +211,7 @@ def test_rough_dielectric_extremes_bounded(roughness, eta):
 def test_conductor_extremes_bounded(roughness, eta, k):
     """Conductor at roughness 0 and 1 (alpha 1), with eta 4 and k 0 (a pure dielectric-like
     Fresnel) and with gold-like constants: finite, never brighter than the sky."""
-    desc = single_object_scene(MaterialDesc("conductor", params(eta=eta, k=k, roughness=roughness,
-                                                                remaproughness=False), HERE))
+    desc = single_object_scene(material("conductor", eta=eta, k=k, roughness=roughness, remaproughness=False))
     img = render(desc, spp=32)
     h = img.shape[0]
     centre = img[h // 4: 3 * h // 4, h // 4: 3 * h // 4]
@@ -224,7 +225,7 @@ def test_conductor_extremes_bounded(roughness, eta, k):
 def test_thin_film_thickness_extremes(thickness_nm):
     """Film thickness 0 (the bare substrate) and 100 um (thousands of fringes per nm of
     wavelength, phases of ~1e3 radians through cos): finite and no brighter than the sky."""
-    desc = single_object_scene(MaterialDesc("thinfilm", params(thickness=thickness_nm), HERE))
+    desc = single_object_scene(material("thinfilm", thickness=thickness_nm))
     img = render(desc, spp=32)
     unused = [w for w in desc.warnings if '"thickness"' in w]
     assert not unused, f"the thin-film material ignored its thickness parameter: {unused}"
@@ -290,7 +291,7 @@ def test_tiny_grain_on_a_kilometre_plane(where, fine):
 def test_camera_inside_a_closed_diffuse_sphere_sees_black():
     """Inside a closed opaque sphere no sky light arrives: exactly 0, finite, no NaN."""
     desc = single_object_scene(diffuse(0.9), sky=1.0)
-    desc.camera.camera_to_world = look_at((0.1, 0.2, 0.0), (1, 0, 0), (0, 1, 0))
+    desc.camera.camera_to_world = world_from_camera((0.1, 0.2, 0.0), (1, 0, 0), (0, 1, 0))
     img = render(desc, spp=8)
     assert img.max() == 0.0
 
@@ -329,20 +330,6 @@ def test_degenerate_triangles_render_without_nan(tmp_path):
     # the camera sees the quad's back (normal -z faces the camera: front); centre is the quad
     centre = img[h // 4: 3 * h // 4, h // 4: 3 * h // 4]
     np.testing.assert_allclose(centre.mean(), RHO, atol=0.03)
-
-
-def test_area_light_ignores_zero_area_triangles():
-    """Host side: an emissive mesh with degenerate triangles samples only the ones with area."""
-    from renderer.lights import LightTable
-
-    tris = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]],      # area 0.5
-                     [[0, 0, 0], [1, 0, 0], [2, 0, 0]],      # collinear
-                     [[0, 0, 0], [0, 0, 0], [0, 0, 0]]], float)
-    t = LightTable()
-    i = t.add_area(tris, np.ones(3), False)
-    assert i == 0 and t.tri_count[0] == 1 and t.area[0] == pytest.approx(0.5)
-    assert np.all(np.isfinite(t.cdfs[-1])) and t.cdfs[-1][-1] == 1.0
-    assert LightTable().add_area(tris[1:], np.ones(3), False) == -1      # nothing left: no light
 
 
 # ---- a 100000:1 sun in an environment map --------------------------------------------------------
@@ -395,8 +382,8 @@ def test_environment_sun_100000_to_1_is_unbiased(tmp_path):
     plane = MeshDesc(positions=np.array([[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], np.float32),
                      indices=np.array([[0, 1, 2], [0, 2, 3]], np.int32))
     desc = single_object_scene(diffuse(), mesh=plane, sky=1.0)
-    desc.infinite_lights[0].filename = env
-    desc.camera.camera_to_world = look_at((0, 0, 1), (0, 0, 0), (0, 1, 0))
+    desc.lights[0] = light("infinite", filename=env)
+    desc.camera.camera_to_world = world_from_camera((0, 0, 1), (0, 0, 0), (0, 1, 0))
     desc.integrator.max_depth = 1
     img = render(desc, spp=64)
     px = img[..., 0].ravel()                 # 256 iid estimates of the same value
@@ -416,7 +403,7 @@ def test_4096_spp_accumulates_without_precision_loss():
     from renderer.session import RenderSession
 
     desc = single_object_scene(diffuse(), sky=0.1, res=2)
-    desc.camera.camera_to_world = look_at((0, 0, -5), (0, 0, -10), (0, 1, 0))   # away from the sphere
+    desc.camera.camera_to_world = world_from_camera((0, 0, -5), (0, 0, -10), (0, 1, 0))   # away from the sphere
     session = RenderSession(desc, settings_for(desc, width=2, height=2), threads=1)
     session.run(4096)
     assert session.film.spp == 4096

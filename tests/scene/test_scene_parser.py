@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 
 from renderer.errors import Location, MissingFileError, SceneError
+from renderer.materials import diffuse
+from renderer.parameters import TextureRef
 from renderer.scene import load_description
 from renderer.scene.builder import UNSUPPORTED, Builder
 from renderer.scene.params import Param, ParamSet
@@ -15,7 +17,7 @@ from renderer.scene.parser import SIGNATURES
 from renderer.scene.shapes import bilinear_mesh, disk, sphere
 from renderer.scene.tokenizer import tokenize
 
-DATA = Path(__file__).parent / "data" / "scenes"
+DATA = Path(__file__).parents[1] / "data" / "scenes"
 HEAD = 'Camera "perspective"\nWorldBegin\n'          # two lines: scene text after it starts at line 3
 
 
@@ -179,7 +181,8 @@ def test_motion_blur_keeps_the_shutter_open_transform(tmp_path):
     s = load(tmp_path, HEAD + 'TransformTimes 0 1\nActiveTransform EndTime\nTranslate 5 0 0\n'
                               'ActiveTransform All\nTranslate 0 1 0\nShape "sphere"\n')
     np.testing.assert_allclose(s.instance_sets[0].transforms[0][:3, 3], [0, 1, 0])
-    assert [w.split(": ")[1] for w in s.warnings] == ["TransformTimes", "ActiveTransform", "ActiveTransform"]
+    assert [w.split(": ")[1] for w in s.warnings] == ["TransformTimes", "ActiveTransform", "ActiveTransform",
+                                                      "scene has no lights"]
     error_at(tmp_path, HEAD + "ActiveTransform Sometimes", 3, "StartTime, EndTime or All")
 
 
@@ -193,32 +196,6 @@ def test_coordinate_systems_and_camera_space(tmp_path):
     assert any(w.endswith('no coordinate system named "nowhere"; ignored (as pbrt does)') for w in s.warnings)
 
 
-def test_distant_light_direction_points_to_the_light_through_the_ctm(tmp_path):
-    s = load(tmp_path, HEAD + 'Rotate 90 1 0 0\nLightSource "distant" "point3 from" [0 0 5] "point3 to" [0 0 0]'
-                              ' "rgb L" [1 2 3] "float scale" 2 "float angularradius" 0.5\n'
-                              'LightSource "distant"\n')
-    a, b = s.distant_lights
-    np.testing.assert_allclose(a.direction, [0, -1, 0], atol=1e-12)      # Rx(90) maps +z to -y
-    np.testing.assert_allclose(a.L, [2, 4, 6])
-    assert a.angular_radius_deg == 0.5
-    np.testing.assert_allclose(b.direction, [0, 1, 0], atol=1e-12)       # default from - to = -z
-
-
-def test_infinite_light_defaults_and_image(tmp_path):
-    (tmp_path / "sky.exr").write_bytes(b"")
-    s = load(tmp_path, HEAD + 'LightSource "infinite"\nLightSource "infinite" "string filename" "sky.exr" '
-                              '"float scale" 3 "float illuminance" 5\n')
-    a, b = s.infinite_lights
-    np.testing.assert_allclose(a.L, [1, 1, 1])
-    assert a.filename is None and b.filename == tmp_path / "sky.exr"
-    np.testing.assert_allclose(b.L, [3, 3, 3])
-    assert s.warnings == [f'{tmp_path / "scene.pbrt"}:4: LightSource "infinite": parameter "float illuminance" '
-                          'is not supported and was ignored']
-    error_at(tmp_path, HEAD + 'LightSource "infinite" "string filename" "gone.exr"', 3, "not found",
-             kind=MissingFileError)
-    error_at(tmp_path, HEAD + 'LightSource "infinite" "string filename" "sky.exr" "rgb L" [1 1 1]', 3, "not both")
-
-
 # --- graphics state --------------------------------------------------------------------------------
 
 def test_attribute_blocks_restore_state(tmp_path):
@@ -230,8 +207,7 @@ def test_attribute_blocks_restore_state(tmp_path):
     inside, after, last = s.shapes
     assert s.materials[inside.material].kind == "dielectric" and s.materials[after.material].kind == "conductor"
     assert inside.reverse_orientation and not after.reverse_orientation
-    assert inside.area_light.two_sided and after.area_light is None
-    np.testing.assert_allclose(inside.area_light.L @ [0.2126, 0.7152, 0.0722], 1.0, rtol=1e-3)  # luminance 1
+    assert inside.area_light.values["twosided"] and after.area_light is None
     np.testing.assert_allclose(s.instance_sets[1].transforms[0], np.eye(4))
     # TransformBegin/End restores only the transform
     np.testing.assert_allclose(s.instance_sets[2].transforms[0], np.eye(4))
@@ -272,8 +248,8 @@ def test_defaults_without_options(tmp_path):
     assert (s.integrator.kind, s.integrator.max_depth) == ("path", 5)
     # the default material appears once, lazily: diffuse, reflectance 0.5
     assert len(s.materials) == 1 and s.materials[0].kind == "diffuse"
-    np.testing.assert_allclose(s.materials[0].params.rgb("reflectance"), [0.5] * 3)
-    assert s.warnings == []
+    assert s.materials[0].values == {} and diffuse.PARAMS.value({}, "reflectance") == 0.5
+    assert s.warnings == [f'{tmp_path / "scene.pbrt"}: scene has no lights: the image will be black']
 
 
 @pytest.mark.parametrize("text, line, match", [
@@ -283,11 +259,10 @@ def test_defaults_without_options(tmp_path):
     ('Scale 0 1 1\nCamera "perspective"\nWorldBegin', 2, "singular"),
     ('LookAt 0 0 0  0 1 0  0 1 0\nWorldBegin', 1, "parallel"),
     (HEAD + 'Shape "curve" "point3 P" [0 0 0 1 1 1 2 2 2 3 3 3]', 3, 'Shape "curve" is not supported'),
-    (HEAD + 'LightSource "spot"', 3, 'LightSource "spot" is not supported'),
-    (HEAD + 'LightSource "point"', 3, 'LightSource "point" is not supported'),
+    (HEAD + 'LightSource "goniometric"', 3, 'LightSource "goniometric" is not supported'),
     (HEAD + 'Material "measured"', 3, 'Material "measured" is not supported'),
     (HEAD + 'MediumInterface "fog" ""', 3, "MediumInterface is not supported"),
-    (HEAD + 'AreaLightSource "spot"', 3, 'unknown AreaLightSource'),
+    (HEAD + 'AreaLightSource "spot"', 3, 'AreaLightSource "spot" is not supported'),
     (HEAD + 'NamedMaterial "nope"', 3, 'no material named "nope"'),
     (HEAD + 'MakeNamedMaterial "m" "string type" "diffuse"\nMakeNamedMaterial "m" "string type" "diffuse"', 4,
      "defined twice"),
@@ -295,6 +270,14 @@ def test_defaults_without_options(tmp_path):
     (HEAD + 'Texture "t" "color" "constant"', 3, 'must be "float" or "spectrum"'),
     (HEAD + 'Texture "t" "float" "constant"\nTexture "t" "float" "constant"', 4, "defined twice"),
     (HEAD + 'Rotate 10 0 0 0', 3, "zero length"),
+    (HEAD + 'Texture "t" "float" "bogus"', 3, 'unknown texture class "bogus"'),
+    (HEAD + 'Texture "t" "float" "wrinkled"', 3, 'class "wrinkled" is not supported'),
+    (HEAD + 'Texture "t" "spectrum" "imagemap" "string filename" "nope.png"', 3, "texture image not found"),
+    (HEAD + 'Texture "t" "spectrum" "imagemap"', 3, 'needs "string filename"'),
+    (HEAD + 'Texture "t" "float" "checkerboard" "integer dimension" 3', 3, "only 2D"),
+    (HEAD + 'Texture "t" "float" "checkerboard"\n  "string mapping" "spherical"', 4, 'mapping "spherical"'),
+    (HEAD + 'Texture "t" "float" "checkerboard" "rgb tex1" [1 0 0]', 3, '"tex1" must be of type float'),
+    (HEAD + 'Texture "t" "float" "scale" "texture tex" "nope"', 3, 'no texture named "nope"'),
 ])
 def test_semantic_errors_are_located(tmp_path, text, line, match):
     error_at(tmp_path, text, line, match)
@@ -318,6 +301,7 @@ def test_unsupported_things_and_unused_parameters_warn_with_location(tmp_path):
         f"{f}:6: MakeNamedMedium: {UNSUPPORTED[('MakeNamedMedium', '*')][1]}",
         f'{f}:9: Shape "sphere": parameter "float alpha" is not supported and was ignored',
         f"{f}:10: Attribute: default parameters set by Attribute are ignored",
+        f"{f}: scene has no lights: the image will be black",
     ]
     assert (s.film.width, s.sampler.spp, s.sampler.kind, s.integrator.max_depth) == (32, 6, "independent", 3)
 
@@ -330,19 +314,20 @@ def test_unsupported_table_is_well_formed_and_every_directive_is_handled():
 
 # --- materials and textures ------------------------------------------------------------------------
 
-def test_named_materials_textures_and_interface(tmp_path):
+def test_named_materials_and_textures(tmp_path):
+    (tmp_path / "h.png").touch()                 # loading checks the image exists; upload reads it
     s = load(tmp_path, HEAD + 'Texture "bumps" "float" "imagemap" "string filename" "h.png"\n'
                               'MakeNamedMaterial "gold" "string type" "conductor" "texture displacement" "bumps"\n'
-                              'Material "interface"\nShape "sphere"\nNamedMaterial "gold"\nShape "disk"\n'
-                              'Material ""\nShape "disk"\n')
+                              'Material "diffuse"\nShape "sphere"\nNamedMaterial "gold"\nShape "disk"\n'
+                              'Material "diffuse"\nShape "disk"\n')
     tex = s.textures["bumps"]
     assert (tex.value_type, tex.kind, tex.base_dir) == ("float", "imagemap", tmp_path)
     assert tex.params.string("filename") == "h.png"
     gold = s.materials[s.shapes[1].material]
     assert (gold.kind, gold.name) == ("conductor", "gold")
-    assert "displacement" in gold.params and not gold.params.params["displacement"].used
-    assert [s.materials[sh.material].kind for sh in s.shapes] == ["interface", "conductor", "interface"]
-    assert s.warnings == []                              # material params are left to the device stage
+    assert gold.values == {"displacement": TextureRef("bumps")}     # plain values, read at load time
+    assert [s.materials[sh.material].kind for sh in s.shapes] == ["diffuse", "conductor", "diffuse"]
+    assert not [w for w in s.warnings if "parameter" in w]
 
 
 # --- shapes -----------------------------------------------------------------------------------------
@@ -404,8 +389,9 @@ def test_trianglemesh_and_validation(tmp_path):
     s = load(tmp_path, HEAD + 'Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "float uv" [0 0 1 0 0 1]\n'
                               'Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "integer indices" []\n')
     assert s.meshes[0].indices.tolist() == [[0, 1, 2]] and s.meshes[0].uvs.shape == (3, 2)
-    assert len(s.meshes) == 1 and s.warnings == [f'{tmp_path / "scene.pbrt"}:4: Shape "trianglemesh" has no '
-                                                 'triangles; skipped']
+    assert len(s.meshes) == 1 and s.warnings == [
+        f'{tmp_path / "scene.pbrt"}:4: Shape "trianglemesh" has no triangles; skipped',
+        f'{tmp_path / "scene.pbrt"}: scene has no lights: the image will be black']
     error_at(tmp_path, HEAD + '\nShape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "integer indices" [0 1 3]',
              4, "out of range")
     error_at(tmp_path, HEAD + 'Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0 1 1 1]', 3, "indices")
@@ -521,12 +507,14 @@ def test_mini_scene_round_trip():
     np.testing.assert_allclose(s.camera.camera_to_world[:3, 2], np.array([0, -1, 5]) / math.sqrt(26))
     assert s.camera.fov_deg == 40
     assert [m.kind for m in s.materials] == ["dielectric", "diffuse", "diffuse"]
-    assert s.materials[1].params.texture("reflectance") == "checks" and "checks" in s.textures
-    assert len(s.infinite_lights) == 1 and len(s.distant_lights) == 1
-    np.testing.assert_allclose(s.distant_lights[0].direction, [0, 1, 0])
-    np.testing.assert_allclose(s.distant_lights[0].L @ [0.2126, 0.7152, 0.0722], 2.0, rtol=1e-3)
+    assert s.materials[1].values["reflectance"] == TextureRef("checks") and "checks" in s.textures
+    assert [light.kind for light in s.lights] == ["infinite", "distant"]
+    sun = s.lights[1].values
+    assert (sun["from"], sun["scale"], sun["angularradius"]) == ((0, 10, 0), 2.0, 0.27)
+    np.testing.assert_allclose(np.asarray(sun["L"]) @ [0.2126, 0.7152, 0.0722], 1.0, rtol=1e-3)   # blackbody
     emissive = [sh for sh in s.shapes if sh.area_light is not None]
-    assert len(emissive) == 1 and np.allclose(emissive[0].area_light.L, 2.0)
+    assert len(emissive) == 1 and emissive[0].area_light.values["L"] == (4, 4, 4)
+    assert emissive[0].area_light.values["scale"] == 0.5
     pebble = [i for i in s.instance_sets if len(i.shapes) == 1 and s.shapes[i.shapes[0]].material == 0]
     assert len(pebble) == 2 and pebble[0].shapes == pebble[1].shapes
     for inst in s.instance_sets:

@@ -7,7 +7,8 @@ import trimesh
 
 import renderer
 from renderer.geometry.raycast import cast_rays_instanced
-from renderer.scene.description import MaterialDesc
+from renderer.materials import material
+from renderer.parameters import TextureRef
 from scenes_py import HERE, params, single_object_scene
 
 
@@ -87,7 +88,7 @@ def test_thin_lens_focus_plane_is_sharp():
     from pathlib import Path
 
     def render_at(focus: float) -> np.ndarray:
-        desc = single_object_scene(MaterialDesc("diffuse", params(reflectance="checks"), HERE), mesh=quad, res=32,
+        desc = single_object_scene(material("diffuse", reflectance=TextureRef("checks")), mesh=quad, res=32,
                                    fov=40, distance=4.0)
         desc.textures["checks"] = TextureDesc("checks", "spectrum", "checkerboard",
                                               params(uscale=8.0, vscale=8.0, tex1=(1, 1, 1), tex2=(0, 0, 0)),

@@ -5,8 +5,9 @@ import numpy as np
 import pytest
 
 import renderer
-from renderer.scene.description import DistantLightDesc, MaterialDesc
-from scenes_py import HERE, params, single_object_scene, sphere_mesh
+from renderer.lights import light
+from renderer.materials import material
+from scenes_py import single_object_scene, sphere_mesh
 
 
 def object_pixels(img: np.ndarray) -> np.ndarray:
@@ -20,7 +21,7 @@ def test_white_furnace_diffuse(nee):
     """Albedo 1 under a uniform sky of 1 renders 1 everywhere (up to MIS noise with NEE)."""
     mesh = sphere_mesh()
     mesh.normals = None  # flat facets: a convex polyhedron never sees itself, so no path is lost
-    desc = single_object_scene(MaterialDesc("diffuse", params(reflectance=(1.0, 1.0, 1.0)), HERE), mesh=mesh)
+    desc = single_object_scene(material("diffuse", reflectance=(1.0, 1.0, 1.0)), mesh=mesh)
     img = renderer.render(desc, spp=64, nee=nee)
     assert np.all(np.isfinite(img))
     assert abs(img.mean() - 1.0) < 0.01
@@ -30,7 +31,7 @@ def test_white_furnace_diffuse(nee):
 
 
 def test_grey_furnace_scales_with_albedo():
-    desc = single_object_scene(MaterialDesc("diffuse", params(reflectance=(0.25, 0.5, 0.75)), HERE))
+    desc = single_object_scene(material("diffuse", reflectance=(0.25, 0.5, 0.75)))
     img = object_pixels(renderer.render(desc, spp=64))
     np.testing.assert_allclose(img.mean(axis=(0, 1)), [0.25, 0.5, 0.75], rtol=0.03)
 
@@ -39,7 +40,7 @@ def test_grey_furnace_scales_with_albedo():
 def test_dielectric_sphere_conserves_energy(roughness):
     """A glass sphere in a uniform sky neither creates nor loses light: every path escapes to a
     sky of 1 with throughput 1 (radiance scaling by 1/eta^2 in and eta^2 out cancels)."""
-    desc = single_object_scene(MaterialDesc("dielectric", params(eta=1.5, roughness=roughness), HERE))
+    desc = single_object_scene(material("dielectric", eta=1.5, roughness=roughness))
     desc.integrator.max_depth = 64
     img = object_pixels(renderer.render(desc, spp=64))
     assert np.all(np.isfinite(img))
@@ -53,8 +54,8 @@ def test_dielectric_sphere_conserves_energy(roughness):
 @pytest.mark.parametrize("roughness", [0.0, 0.05, 0.5, 1.0])
 def test_conductor_reflects_at_most_the_sky(roughness):
     """A metal never reflects more than it receives; a perfect (k large) smooth mirror reflects all."""
-    desc = single_object_scene(MaterialDesc("conductor", params(eta=(0.2, 0.9, 1.1), k=(3.9, 2.4, 2.1),
-                                                                 roughness=roughness), HERE))
+    desc = single_object_scene(material("conductor", eta=(0.2, 0.9, 1.1), k=(3.9, 2.4, 2.1),
+                                                                 roughness=roughness))
     img = object_pixels(renderer.render(desc, spp=64))
     assert np.all(np.isfinite(img))
     assert img.mean(axis=(0, 1)).max() <= 1.0 + 0.02
@@ -62,14 +63,14 @@ def test_conductor_reflects_at_most_the_sky(roughness):
 
 
 def test_smooth_mirror_reflects_everything():
-    desc = single_object_scene(MaterialDesc("conductor", params(reflectance=(0.9999, 0.9999, 0.9999)), HERE))
+    desc = single_object_scene(material("conductor", reflectance=(0.9999, 0.9999, 0.9999)))
     img = object_pixels(renderer.render(desc, spp=4))
     np.testing.assert_allclose(img, 1.0, atol=2e-3)
 
 
 def test_same_seed_same_image_bit_for_bit():
-    desc = single_object_scene(MaterialDesc("diffuse", params(reflectance=(0.5, 0.5, 0.5)), HERE))
-    desc.distant_lights.append(DistantLightDesc(direction=np.array([0.3, 1.0, -0.5]), L=np.full(3, 2.0)))
+    desc = single_object_scene(material("diffuse", reflectance=(0.5, 0.5, 0.5)))
+    desc.lights.append(light("distant", L=2.0, from_=(0.3, 1.0, -0.5), to=(0, 0, 0)))
     a = renderer.render(desc, spp=8, seed=3)
     b = renderer.render(desc, spp=8, seed=3)
     c = renderer.render(desc, spp=8, seed=4)
@@ -79,7 +80,7 @@ def test_same_seed_same_image_bit_for_bit():
 
 def test_passes_are_mergeable_across_thread_counts():
     """Random numbers depend on (seed, sample, pixel) only, not on how rows are split."""
-    desc = single_object_scene(MaterialDesc("diffuse", params(reflectance=(0.5, 0.5, 0.5)), HERE))
+    desc = single_object_scene(material("diffuse", reflectance=(0.5, 0.5, 0.5)))
     a = renderer.render(desc, spp=4, seed=1, threads=1)
     b = renderer.render(desc, spp=4, seed=1, threads=2)
     np.testing.assert_array_equal(a, b)
@@ -92,9 +93,8 @@ def test_distant_light_irradiance():
 
     quad = MeshDesc(positions=np.array([[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], np.float32),
                     indices=np.array([[0, 1, 2], [0, 2, 3]], np.int32))
-    desc = single_object_scene(MaterialDesc("diffuse", params(reflectance=(0.5, 0.5, 0.5)), HERE), mesh=quad, sky=0.0)
-    desc.infinite_lights.clear()
+    desc = single_object_scene(material("diffuse", reflectance=(0.5, 0.5, 0.5)), mesh=quad, sky=0.0)
     desc.camera.camera_to_world = look_at((0, 0, -3), (0, 0, 0), (0, 1, 0))
-    desc.distant_lights.append(DistantLightDesc(direction=np.array([0.0, 0.0, -1.0]), L=np.full(3, np.pi)))
+    desc.lights = [light("distant", L=np.pi, from_=(0.0, 0.0, -1.0), to=(0, 0, 0))]
     img = renderer.render(desc, spp=4)
     np.testing.assert_allclose(img, 0.5, rtol=1e-4)

@@ -11,7 +11,7 @@ import pytest
 
 from assets_gen import recipe
 
-SCENES_DIR = Path(__file__).resolve().parents[1] / "scenes"
+SCENES_DIR = Path(__file__).resolve().parents[2] / "scenes"
 #: top-level scenes (files in scenes/parts/ are pieces included by them)
 SCENES = sorted(p.stem for p in SCENES_DIR.glob("*.pbrt"))
 LONG_SIDE = 32           # pixels

@@ -8,29 +8,24 @@ import pytest
 import warp as wp
 
 import renderer
-from bsdf_harness import bsdf_moments
+from bsdf_harness import bsdf_moments, chi2_pvalue, constant_rows
 from renderer.api import init_warp
-from renderer.materials import disney
-from renderer.materials.bsdf import BSDF, MAX_SLOTS, Slots
-from renderer.scene.description import MaterialDesc
 from renderer.integrators.subsurface import diffusion_profile, profile_scale, sample_profile_radius
-from scenes_py import HERE, params, single_object_scene, sphere_mesh
+from renderer.materials import disney, material
+from renderer.materials.bsdf import BSDF, Slots
+from scenes_py import single_object_scene, sphere_mesh
 
 init_warp()
 
-NAMES = ("color", "metallic", "eta", "roughness", "speculartint", "anisotropic", "sheen", "sheentint", "clearcoat",
-         "clearcoatgloss", "spectrans", "scatterdistance", "thin", "flatness", "difftrans")
-DEFAULTS = dict(color=0.5, metallic=0.0, eta=1.5, roughness=0.5, speculartint=0.0, anisotropic=0.0, sheen=0.0,
-                sheentint=0.5, clearcoat=0.0, clearcoatgloss=1.0, spectrans=0.0, scatterdistance=0.0, thin=0.0,
-                flatness=0.0, difftrans=1.0)
-ALL_0 = {n: 0.0 for n in NAMES} | {"eta": 1.5}
-ALL_1 = {n: 1.0 for n in NAMES} | {"eta": 1.5, "scatterdistance": 0.0}
+
+def corner(x: float) -> dict:
+    """Every parameter at x (bools: x > 0), eta at 1.5 and no subsurface."""
+    v = {p.name: (x > 0) if p.type == "bool" else x for p in disney.PARAMS}
+    return v | {"eta": 1.5, "scatterdistance": 0.0}
 
 
-def rows(**kw) -> list:
-    """Slot rows (constants) in the module's order, pbrt-v3 defaults unless given."""
-    v = DEFAULTS | kw
-    return [np.broadcast_to(np.asarray(v[n], np.float32), 3) for n in NAMES]
+ALL_0 = corner(0.0)
+ALL_1 = corner(1.0)
 
 
 # one case per lobe, isolated as far as the model allows, plus mixtures
@@ -40,8 +35,8 @@ LOBES = {
     "clearcoat+sheen": dict(color=(0.2, 0.4, 0.8), clearcoat=1.0, clearcoatgloss=0.5, sheen=1.0),
     "speculartint": dict(color=(0.9, 0.2, 0.2), speculartint=1.0, roughness=0.3),
     "glass": dict(color=(0.9, 0.9, 0.7), spectrans=1.0, roughness=0.5),
-    "thin-flat-difftrans": dict(thin=1.0, flatness=1.0, difftrans=1.4, roughness=0.6),
-    "thin-glass": dict(thin=1.0, spectrans=1.0, roughness=0.5, eta=1.4),
+    "thin-flat-difftrans": dict(thin=True, flatness=1.0, difftrans=1.4, roughness=0.6),
+    "thin-glass": dict(thin=True, spectrans=1.0, roughness=0.5, eta=1.4),
     "subsurface-surface": dict(scatterdistance=(0.1, 0.05, 0.02), roughness=0.7, sheen=0.5),
 }
 ANGLES = {"oblique": (0.3, 0.2, 0.9), "grazing": (0.9, 0.1, 0.1), "below": (0.5, -0.4, -0.6)}
@@ -50,7 +45,7 @@ ANGLES = {"oblique": (0.3, 0.2, 0.9), "grazing": (0.9, 0.1, 0.1), "below": (0.5,
 @pytest.mark.parametrize("wo", list(ANGLES.values()), ids=list(ANGLES))
 @pytest.mark.parametrize("case", list(LOBES), ids=list(LOBES))
 def test_sampling_follows_pdf(case, wo):
-    m = bsdf_moments("disney", rows(**LOBES[case]), wo, n=200_000)
+    m = bsdf_moments("disney", LOBES[case], wo, n=200_000)
     # importance sampling and uniform sampling estimate the same albedo: the sampled directions
     # are distributed as pdf() says (sample() itself reports exactly pdf() and eval())
     tol = 5 * m["albedo_uniform_stderr"] + 0.015 * np.abs(m["albedo_uniform"]) + 1e-3
@@ -67,19 +62,21 @@ def test_sampling_follows_pdf(case, wo):
 
 @pytest.mark.parametrize("corner", ["all 0", "all 1 (thin)", "all 1 (solid)"])
 def test_albedo_at_most_one_at_corners(corner):
-    kw = {"all 0": ALL_0, "all 1 (thin)": ALL_1, "all 1 (solid)": ALL_1 | {"thin": 0.0}}[corner]
+    kw = {"all 0": ALL_0, "all 1 (thin)": ALL_1, "all 1 (solid)": ALL_1 | {"thin": False}}[corner]
     for wo in [(0.0, 0.0, 1.0), (0.6, 0.0, 0.8), (0.95, 0.0, 0.31), (0.995, 0.0, 0.1)]:
-        m = bsdf_moments("disney", rows(**kw), wo, n=100_000)
+        m = bsdf_moments("disney", kw, wo, n=100_000)
         assert np.all(m["albedo_sampled"] <= 1.0 + 0.01), (wo, m["albedo_sampled"])
 
 
 @wp.kernel
-def _reciprocity(p: Slots, wo: wp.array(dtype=wp.vec3), wi: wp.array(dtype=wp.vec3), out: wp.array(dtype=wp.vec3, ndim=2)):
+def _reciprocity(p: Slots, flags: int, wo: wp.array(dtype=wp.vec3), wi: wp.array(dtype=wp.vec3),
+                 out: wp.array(dtype=wp.vec3, ndim=2)):
     i = wp.tid()
     b = BSDF()
     b.p = p
-    out[i, 0] = disney.eval(b, wo[i], wi[i])
-    out[i, 1] = disney.eval(b, wi[i], wo[i])
+    b.flags = flags
+    out[i, 0] = disney.eval_pdf(b, wo[i], wi[i]).f
+    out[i, 1] = disney.eval_pdf(b, wi[i], wo[i]).f
 
 
 def _hemisphere(rng, n: int) -> np.ndarray:
@@ -94,10 +91,9 @@ def _hemisphere(rng, n: int) -> np.ndarray:
 def test_reflection_is_reciprocal(case):
     rng = np.random.default_rng(3)
     wo, wi = _hemisphere(rng, 2000), _hemisphere(rng, 2000)
-    p = np.zeros((MAX_SLOTS, 3), np.float32)
-    p[: len(NAMES)] = rows(**LOBES[case])
+    p, flags = constant_rows("disney", LOBES[case])
     out = wp.zeros((2000, 2), dtype=wp.vec3, device="cpu")
-    wp.launch(_reciprocity, dim=2000, inputs=[Slots(*p.ravel().tolist()), wp.array(wo, dtype=wp.vec3),
+    wp.launch(_reciprocity, dim=2000, inputs=[Slots(*p.ravel().tolist()), flags, wp.array(wo, dtype=wp.vec3),
                                               wp.array(wi, dtype=wp.vec3), out], device="cpu")
     f = out.numpy()
     np.testing.assert_allclose(f[:, 0], f[:, 1], rtol=2e-4, atol=1e-6)
@@ -144,25 +140,17 @@ def _object_mean(desc, spp: int = 64) -> np.ndarray:
 
 
 def _disney_scene(**kw):
-    if np.ndim(kw.get("color", (0.5,) * 3)) == 0:
-        kw["color"] = (kw["color"],) * 3
-    ps = params(**{k: v for k, v in kw.items() if k != "thin"})
-    if kw.get("thin"):
-        from renderer.scene.params import Param
-        ps.add(Param("bool", "thin", [True], HERE))
-    desc = single_object_scene(MaterialDesc("disney", ps, HERE), mesh=sphere_mesh())
+    desc = single_object_scene(material("disney", **kw), mesh=sphere_mesh())
     desc.integrator.max_depth = 32
     # an unused subsurface material: every render here then shares one compiled kernel (the
     # subsurface step is an identity for materials without scatterdistance)
-    desc.materials.append(MaterialDesc("disney", params(scatterdistance=(0.1, 0.1, 0.1)), HERE))
+    desc.materials.append(material("disney", scatterdistance=(0.1, 0.1, 0.1)))
     return desc
 
 
 @pytest.mark.parametrize("corner", ["all 0", "all 1 (thin)", "all 1 (solid)", "white glass"])
 def test_furnace_never_gains_energy(corner):
-    kw = {"all 0": {k: v for k, v in ALL_0.items() if k not in ("thin", "scatterdistance")},
-          "all 1 (thin)": {k: v for k, v in ALL_1.items() if k != "scatterdistance"} | {"thin": True},
-          "all 1 (solid)": {k: v for k, v in ALL_1.items() if k not in ("thin", "scatterdistance")},
+    kw = {"all 0": ALL_0, "all 1 (thin)": ALL_1, "all 1 (solid)": ALL_1 | {"thin": False},
           "white glass": dict(color=1.0, spectrans=1.0, roughness=0.1)}[corner]
     mean = _object_mean(_disney_scene(**kw))
     assert np.all(mean <= 1.0 + 0.02), mean
@@ -192,12 +180,10 @@ def test_subsurface_sphere_furnace_is_bounded():
 @pytest.mark.parametrize("case", ["diffuse+retro", "specular-metal-aniso", "clearcoat+sheen", "glass",
                                   "thin-flat-difftrans", "thin-glass"])
 def test_sampled_directions_chi_square(case):
-    """Histogram of sampled directions against the pdf integrated per cell (Pearson chi-square)."""
-    from bsdf_harness import chi2_pvalue
-
+    """Histogram of sampled directions against eval_pdf's density integrated per cell (Pearson chi-square)."""
     if LOBES[case].get("thin") or LOBES[case].get("spectrans"):
         wos = [ANGLES["oblique"], ANGLES["below"]]
     else:
         wos = [ANGLES["oblique"]]
     for wo in wos:
-        assert chi2_pvalue("disney", rows(**LOBES[case]), wo) > 1e-4, wo
+        assert chi2_pvalue("disney", LOBES[case], wo) > 1e-4, wo

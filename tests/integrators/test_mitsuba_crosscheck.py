@@ -39,8 +39,11 @@ import trimesh
 mi = pytest.importorskip("mitsuba", reason="mitsuba is not installed (pip install 'summertime[test]')")
 
 import renderer  # noqa: E402
-from renderer.scene.description import (CameraDesc, DistantLightDesc, FilmDesc, InfiniteLightDesc,  # noqa: E402
-                                        InstanceSetDesc, MaterialDesc, MeshDesc, SamplerDesc, SceneDescription,
+from renderer.lights import light  # noqa: E402
+from renderer.materials import material  # noqa: E402
+from renderer.parameters import TextureRef  # noqa: E402
+from renderer.scene.description import (CameraDesc, FilmDesc, InstanceSetDesc,  # noqa: E402
+                                        MeshDesc, SamplerDesc, SceneDescription,
                                         ShapeDesc, TextureDesc)
 from scenes_py import HERE, look_at, params  # noqa: E402
 
@@ -112,21 +115,21 @@ def ours(spec: Spec) -> SceneDescription:
     for i, o in enumerate(spec.objects):
         desc.meshes.append(MeshDesc(positions=o.positions, indices=o.faces, normals=o.normals, uvs=o.uvs))
         if o.kind == "dielectric":
-            desc.materials.append(MaterialDesc("dielectric", params(eta=o.eta), HERE))
+            desc.materials.append(material("dielectric", eta=o.eta))
         elif o.checker is not None:
             t1, t2, scale = o.checker
             name = f"checks{i}"
             desc.textures[name] = TextureDesc(name, "spectrum", "checkerboard",
                                               params(tex1=t1, tex2=t2, uscale=scale, vscale=scale), Path("."), HERE)
-            desc.materials.append(MaterialDesc("diffuse", params(reflectance=name), HERE))
+            desc.materials.append(material("diffuse", reflectance=TextureRef(name)))
         else:
-            desc.materials.append(MaterialDesc("diffuse", params(reflectance=o.rgb), HERE))
+            desc.materials.append(material("diffuse", reflectance=o.rgb))
         desc.shapes.append(ShapeDesc(mesh=i, material=i))
         desc.instance_sets.append(InstanceSetDesc(shapes=[i], transforms=np.eye(4)[None]))
     if spec.sky is not None:
-        desc.infinite_lights.append(InfiniteLightDesc(light_to_world=np.eye(4), L=np.full(3, spec.sky)))
+        desc.lights.append(light("infinite", L=spec.sky))
     if spec.sun is not None:
-        desc.distant_lights.append(DistantLightDesc(direction=np.asarray(spec.sun[0], float), L=np.full(3, spec.sun[1])))
+        desc.lights.append(light("distant", L=spec.sun[1], from_=spec.sun[0], to=(0, 0, 0)))
     return desc
 
 

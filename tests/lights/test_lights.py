@@ -9,12 +9,15 @@ import warp as wp
 import renderer
 from renderer.api import init_warp
 from renderer.io.images import write_exr
-from renderer.lights import LightTable, Lights, env_pdf, env_radiance, sample_light
+from renderer.lights import infinite, kind_id, light
+from renderer.lights.sample import light_sampler
+from renderer.lights.table import LightTable, Lights
 from renderer.sampling.warps import uniform_sphere
-from renderer.scene.description import InfiniteLightDesc, MaterialDesc
-from scenes_py import HERE, params, single_object_scene
+from renderer.materials import material
+from scenes_py import single_object_scene
 
 init_warp()
+_sample_env = light_sampler((infinite,), (kind_id(infinite.NAME),))
 
 
 @wp.kernel
@@ -22,16 +25,16 @@ def _env_check(lights: Lights, seed: int, out: wp.array(dtype=wp.vec4, ndim=2)):
     i = wp.tid()
     rng = wp.rand_init(seed, i)
     d = uniform_sphere(wp.vec2(wp.randf(rng), wp.randf(rng)))
-    out[i, 0] = wp.vec4(env_pdf(lights, d) * 4.0 * 3.14159265358979, 0.0, 0.0, 0.0)
-    s = sample_light(lights, wp.vec3(0.0), 0.0, wp.vec2(wp.randf(rng), wp.randf(rng)))
-    L = env_radiance(lights, s.wi)
-    out[i, 1] = wp.vec4(s.pdf, env_pdf(lights, s.wi), wp.length(L - s.L), 0.0)
+    out[i, 0] = wp.vec4(infinite.pdf(lights, 0, d) * 4.0 * 3.14159265358979, 0.0, 0.0, 0.0)
+    s = _sample_env(lights, wp.vec3(0.0), 0.0, wp.vec2(wp.randf(rng), wp.randf(rng)))
+    L = infinite.radiance(lights, 0, s.wi)
+    out[i, 1] = wp.vec4(s.pdf, infinite.pdf(lights, 0, s.wi), wp.length(L - s.L), 0.0)
     # E[L / pdf] over light samples is the integral of radiance over the sphere
     Ls = wp.vec3(0.0)
     if s.pdf > 0.0:  # as in the integrator: a zero-density sample (a lat-long pole) contributes nothing
         Ls = s.L / s.pdf
     out[i, 2] = wp.vec4(Ls[0], Ls[1], Ls[2], 0.0)
-    Lu = env_radiance(lights, d) * (4.0 * 3.14159265358979)
+    Lu = infinite.radiance(lights, 0, d) * (4.0 * 3.14159265358979)
     out[i, 3] = wp.vec4(Lu[0], Lu[1], Lu[2], 0.0)
 
 
@@ -43,11 +46,12 @@ def env_image(w: int, h: int, seed: int = 0) -> np.ndarray:
 
 
 @pytest.mark.parametrize("shape", [(32, 16), (16, 16)], ids=["latlong", "equal-area"])
-def test_env_pdf_and_sampling(shape):
-    img = env_image(*shape)
-    table = LightTable()
+def test_env_pdf_and_sampling(tmp_path, shape):
+    path = tmp_path / "env.exr"
+    write_exr(path, env_image(*shape))
     rot = np.array([[1, 0, 0, 0], [0, 0, 1, 0], [0, -1, 0, 0], [0, 0, 0, 1]], dtype=np.float64)
-    table.add_infinite(np.ones(3), img, rot, HERE)
+    table = LightTable()
+    table.add(kind_id(infinite.NAME), infinite.ROW, infinite.entry(light("infinite", rot, filename=path), None))
     L, keep = table.upload("cpu")
     n = 400_000
     out = wp.zeros((n, 4), dtype=wp.vec4, device="cpu")
@@ -67,8 +71,8 @@ def test_mis_render_matches_bsdf_sampling(tmp_path, shape):
     img = env_image(*shape, seed=2)
     img[img > 100] = 20.0  # keep BSDF-only variance testable at low spp
     write_exr(path, img)
-    desc = single_object_scene(MaterialDesc("diffuse", params(reflectance=(0.7, 0.7, 0.7)), HERE))
-    desc.infinite_lights[0] = InfiniteLightDesc(light_to_world=np.eye(4), L=np.ones(3), filename=path)
+    desc = single_object_scene(material("diffuse", reflectance=(0.7, 0.7, 0.7)))
+    desc.lights[0] = light("infinite", filename=path)
     a = renderer.render(desc, spp=256, nee=True)
     b = renderer.render(desc, spp=256, nee=False)
     assert np.all(np.isfinite(a)) and np.all(np.isfinite(b))

@@ -14,10 +14,11 @@ import pytest
 
 from renderer.cli import main
 from renderer.io.images import read_exr
-from renderer.session import RenderSession, load_checkpoint, save_checkpoint
+from renderer.io.checkpoint import load_checkpoint, save_checkpoint
+from renderer.session import RenderSession
 from test_cli import write_scene
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def session_for(path: Path, **kw) -> RenderSession:
@@ -34,7 +35,7 @@ def test_resume_equals_uninterrupted_bit_for_bit(tmp_path):
     whole.run(9)
     first = session_for(scene, seed=3)
     first.run(4)
-    save_checkpoint(tmp_path / "ck.npz", first)
+    save_checkpoint(tmp_path / "ck.npz", first.state())
     second = session_for(scene, seed=3)
     second.restore(load_checkpoint(tmp_path / "ck.npz"))
     second.run(9)

@@ -1,0 +1,196 @@
+"""pbrt-v4's ``infinite`` light: constant radiance ``L``, or an environment image (square: pbrt-v4's
+equal-area octahedral map; 2:1: latitude-longitude), importance sampled with a piecewise-constant
+2D distribution over the image. ``scale`` multiplies either.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import warp as wp
+
+from renderer.errors import Location, MissingFileError, SceneError
+from renderer.io.images import read_image
+from renderer.lights.sample import LightEval, LightSample
+from renderer.lights.table import LightEntry, Lights, Row, colour_parameters, scaled_colour
+from renderer.parameters import Parameter, Parameters
+from renderer.sampling.distribution import distribution_2d, sample_cdf
+from renderer.sampling.equal_area import equal_area_sphere_to_square, equal_area_square_to_sphere
+from renderer.sampling.warps import uniform_sphere
+from renderer.vecmath import PI
+
+if TYPE_CHECKING:
+    from renderer.scene.description import LightDesc
+
+NAME = "infinite"
+DIRECTIVE = "LightSource"
+PARAMS = Parameters(
+    *colour_parameters("L", "constant radiance (not with filename)"),
+    Parameter("filename", "string", doc="environment image: square = equal-area, 2:1 = lat-long"),
+)
+
+MAP_CONSTANT = 0
+MAP_EQUAL_AREA = 1
+MAP_LATLONG = 2
+ROW = Row(ints=("mapping", "width", "height"))
+K = ROW.K
+
+
+def check(given: dict[str, Any], light_to_world: np.ndarray, loc: Location | None,
+          base_dir: Path | None) -> dict[str, Any]:
+    """Refuse L with filename (pbrt-v4 does too) and resolve the image against the scene file."""
+    if "filename" in given and "L" in given:
+        raise SceneError('LightSource "infinite": give either "L" or "filename", not both', loc)
+    if "filename" in given:
+        path = Path(given["filename"])
+        given = {**given, "filename": str(base_dir / path if base_dir is not None else path)}
+        _image_path(given, loc)
+    return given
+
+
+def _image_path(values: dict[str, Any], loc: Location | None) -> Path:
+    path = Path(values["filename"])
+    if not path.is_file():
+        raise MissingFileError(path, loc, "environment image")
+    return path
+
+
+def _mapping(image: np.ndarray, loc: Location | None) -> int:
+    h, w = image.shape[:2]
+    if w == h:
+        return MAP_EQUAL_AREA
+    if w == 2 * h:
+        return MAP_LATLONG
+    raise SceneError(f"environment image must be square (equal-area) or 2:1 (lat-long), got {w}x{h}", loc)
+
+
+def distribution_function(rgb: np.ndarray, mapping: int) -> np.ndarray:
+    """The function the map is importance sampled by: max channel, times sin θ for lat-long."""
+    f = rgb.max(axis=2).astype(np.float64)
+    if mapping == MAP_LATLONG:
+        h = rgb.shape[0]
+        f = f * np.sin(np.pi * (np.arange(h) + 0.5) / h)[:, None]
+    return f
+
+
+def entry(light: LightDesc, tris: np.ndarray | None) -> LightEntry:
+    """The row: mapping and size, the light frame, and the pixels and CDFs in the pools."""
+    v = light.values
+    R = np.asarray(light.light_to_world, dtype=np.float64)[:3, :3]
+    e = LightEntry(L=scaled_colour(v, "L"), ints={"mapping": MAP_CONSTANT, "width": 1, "height": 1},
+                   to_world=R, to_light=np.linalg.inv(R), escapes=True)
+    if v["filename"] is None:
+        return e
+    image = read_image(_image_path(v, light.loc), srgb=True)
+    mapping = _mapping(image, light.loc)
+    rgb = image[..., :3] if image.shape[2] >= 3 else np.repeat(image[..., :1], 3, axis=2)
+    if not np.all(np.isfinite(rgb)) or np.any(rgb < 0):
+        raise SceneError("environment image contains negative, NaN or infinite values", light.loc)
+    rgb = np.ascontiguousarray(rgb, dtype=np.float32)
+    h, w = rgb.shape[:2]
+    cond, marg, _ = distribution_2d(distribution_function(rgb, mapping))
+    e.ints = {"mapping": mapping, "width": w, "height": h}
+    e.f_data = np.concatenate([cond.ravel(), marg])    # (h, w + 1) conditional CDFs, then the marginal
+    e.v_data = rgb.reshape(-1, 3)
+    return e
+
+
+# ---- device ---------------------------------------------------------------------------------------
+
+@wp.func
+def _uv(mapping: int, w_light: wp.vec3) -> wp.vec2:
+    if mapping == MAP_EQUAL_AREA:
+        return equal_area_sphere_to_square(w_light)
+    theta = wp.acos(wp.clamp(w_light[2], -1.0, 1.0))
+    phi = wp.atan2(w_light[1], w_light[0])
+    if phi < 0.0:
+        phi = phi + 2.0 * PI
+    return wp.vec2(phi / (2.0 * PI), theta / PI)
+
+
+@wp.func
+def _jacobian(mapping: int, w_light: wp.vec3) -> float:
+    """Solid angle per unit of (u, v): 4π for the equal-area map, 2π² sin θ for lat-long."""
+    if mapping == MAP_EQUAL_AREA:
+        return 4.0 * PI
+    return 2.0 * PI * PI * wp.sqrt(wp.max(0.0, 1.0 - w_light[2] * w_light[2]))
+
+
+@wp.func
+def _pixel(lights: Lights, i: int, w_light: wp.vec3) -> wp.vec2i:
+    """The image pixel (x, y) that direction w_light (in the light's frame) falls in."""
+    uv = _uv(lights.k[i, K.mapping], w_light)
+    wdt = lights.k[i, K.width]
+    hgt = lights.k[i, K.height]
+    return wp.vec2i(wp.clamp(int(uv[0] * float(wdt)), 0, wdt - 1), wp.clamp(int(uv[1] * float(hgt)), 0, hgt - 1))
+
+
+@wp.func
+def radiance(lights: Lights, i: int, d: wp.vec3) -> wp.vec3:
+    """Radiance arriving along -d (d points away from the scene)."""
+    if lights.k[i, K.mapping] == MAP_CONSTANT:
+        return lights.L[i]
+    xy = _pixel(lights, i, wp.normalize(lights.to_light[i] * d))
+    return wp.cw_mul(lights.L[i], lights.v_pool[lights.v_start[i] + xy[1] * lights.k[i, K.width] + xy[0]])
+
+
+@wp.func
+def pdf(lights: Lights, i: int, d: wp.vec3) -> float:
+    """Solid-angle density of sampling direction d (selection excluded)."""
+    mapping = lights.k[i, K.mapping]
+    if mapping == MAP_CONSTANT:
+        return 1.0 / (4.0 * PI)
+    w = wp.normalize(lights.to_light[i] * d)
+    jac = _jacobian(mapping, w)
+    if jac <= 0.0:
+        return 0.0
+    xy = _pixel(lights, i, w)
+    x = xy[0]
+    y = xy[1]
+    wdt = lights.k[i, K.width]
+    hgt = lights.k[i, K.height]
+    cond = lights.f_start[i] + y * (wdt + 1)
+    marg = lights.f_start[i] + hgt * (wdt + 1)
+    f = (lights.f_pool[cond + x + 1] - lights.f_pool[cond + x]) * float(wdt)
+    fy = (lights.f_pool[marg + y + 1] - lights.f_pool[marg + y]) * float(hgt)
+    return f * fy / jac
+
+
+@wp.func
+def escaped(lights: Lights, i: int, d: wp.vec3) -> LightEval:
+    e = LightEval()
+    e.L = radiance(lights, i, d)
+    e.pdf = pdf(lights, i, d)
+    return e
+
+
+@wp.func
+def sample(lights: Lights, i: int, p: wp.vec3, u: wp.vec2) -> LightSample:
+    s = LightSample()
+    s.delta = False
+    s.dist = 1.0e30
+    mapping = lights.k[i, K.mapping]
+    if mapping == MAP_CONSTANT:
+        # the constant sky has no preferred direction
+        s.wi = uniform_sphere(u)
+        s.L = lights.L[i]
+        s.pdf = 1.0 / (4.0 * PI)
+        return s
+    wdt = lights.k[i, K.width]
+    hgt = lights.k[i, K.height]
+    vy = sample_cdf(lights.f_pool, lights.f_start[i] + hgt * (wdt + 1), hgt, u[1])
+    y = int(vy[1])
+    ux = sample_cdf(lights.f_pool, lights.f_start[i] + y * (wdt + 1), wdt, u[0])
+    uv = wp.vec2(ux[0], vy[0])
+    w = wp.vec3(0.0)
+    if mapping == MAP_EQUAL_AREA:
+        w = equal_area_square_to_sphere(uv)
+    else:
+        theta = uv[1] * PI
+        phi = uv[0] * 2.0 * PI
+        w = wp.vec3(wp.sin(theta) * wp.cos(phi), wp.sin(theta) * wp.sin(phi), wp.cos(theta))
+    s.wi = wp.normalize(lights.to_world[i] * w)
+    s.L = radiance(lights, i, s.wi)
+    s.pdf = pdf(lights, i, s.wi)
+    return s

@@ -1,0 +1,93 @@
+"""A texture's pbrt parameters read and checked once, without Warp: the builder calls
+:func:`read_texture` at load time so a bad class, value or missing image is reported with its
+file:line before any device work, and the device texture table builds from the same record."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from renderer.errors import MissingFileError, SceneError, UnsupportedError
+from renderer.scene.description import TextureDesc
+from renderer.scene.support import SUPPORTED_TEXTURES, TEXTURE_CLASSES
+
+#: imagemap "wrap" modes, numbered as the device's texel lookup reads them
+WRAP = {"repeat": 0, "clamp": 1, "black": 2}
+
+Value = float | np.ndarray        # a float texture's scalar or a spectrum texture's RGB
+
+
+@dataclass(frozen=True)
+class TextureSpec:
+    """What a texture's parameters say, as plain values (one record per ``Texture`` directive)."""
+
+    kind: str                                        # one of SUPPORTED_TEXTURES
+    value: Value                                     # constant; imagemap scale; checkerboard tex1; scale factor
+    alt: Value = 0.0                                 # checkerboard tex2
+    uvmap: tuple[float, float, float, float] = (1.0, 1.0, 0.0, 0.0)   # (su, sv, du, dv)
+    path: Path | None = None                         # imagemap file
+    encoding: str = "sRGB"                           # imagemap encoding: sRGB, linear or "gamma G"
+    wrap: str = "repeat"                             # imagemap wrap mode (a key of WRAP)
+    base: str | None = None                          # scale: the one factor that is a texture
+
+
+def read_texture(desc: TextureDesc) -> TextureSpec:
+    """Check the class and read every parameter it uses; leftovers stay unread in ``desc.params``
+    for the builder's unused-parameter warning."""
+    where = f'Texture "{desc.name}"'
+    if desc.kind not in TEXTURE_CLASSES:
+        raise SceneError(f'{where}: unknown texture class "{desc.kind}" (pbrt-v4 knows '
+                         f'{", ".join(sorted(TEXTURE_CLASSES))})', desc.loc)
+    if desc.kind not in SUPPORTED_TEXTURES:
+        raise UnsupportedError(f'{where}: class "{desc.kind}" is not supported (supported: '
+                               f'{", ".join(sorted(SUPPORTED_TEXTURES))})', desc.loc)
+    p = desc.params
+    mapping = p.string("mapping", "uv")
+    if mapping != "uv":
+        raise UnsupportedError(f'{where}: mapping "{mapping}" is not supported (only "uv")',
+                               p.params["mapping"].loc)
+    uvmap = (p.float("uscale", 1.0), p.float("vscale", 1.0), p.float("udelta", 0.0), p.float("vdelta", 0.0))
+    const = p.float if desc.value_type == "float" else p.rgb
+    if desc.kind == "constant":
+        return TextureSpec("constant", const("value", 1.0))
+    if desc.kind == "checkerboard":
+        if p.int("dimension", 2) != 2:
+            raise UnsupportedError(f"{where}: only 2D checkerboard textures are supported", desc.loc)
+        return TextureSpec("checkerboard", const("tex1", 1.0), const("tex2", 0.0), uvmap)
+    if desc.kind == "scale":
+        return _scale(desc, where)
+    return _imagemap(desc, where, uvmap)
+
+
+def _imagemap(desc: TextureDesc, where: str, uvmap: tuple[float, float, float, float]) -> TextureSpec:
+    p = desc.params
+    fname = p.string("filename")
+    if not fname:
+        raise SceneError(f'{where}: imagemap needs "string filename"', desc.loc)
+    path = (desc.base_dir / fname).resolve()
+    if not path.is_file():
+        raise MissingFileError(path, desc.loc, "texture image")
+    encoding = p.string("encoding", "linear" if path.suffix.lower() in (".exr", ".hdr", ".pfm") else "sRGB")
+    wrap = p.string("wrap", "repeat")
+    if wrap not in WRAP:
+        raise SceneError(f'{where}: imagemap wrap must be one of {sorted(WRAP)}, got "{wrap}"', desc.loc)
+    scale = p.float("scale", 1.0)
+    if p.bool("invert", False):
+        raise UnsupportedError(f'{where}: imagemap "invert" is not supported', desc.loc)
+    p.string("filter")                     # the filter is always bilinear; asking for another is fine
+    return TextureSpec("imagemap", scale, uvmap=uvmap, path=path, encoding=encoding, wrap=wrap)
+
+
+def _scale(desc: TextureDesc, where: str) -> TextureSpec:
+    """pbrt's ``scale`` texture (tex × scale) where at most one factor is a texture: the constant
+    factor folds into that texture's multiplier."""
+    p = desc.params
+    read = p.float_or_texture if desc.value_type == "float" else p.rgb_or_texture
+    tex, scale = read("tex", 1.0), read("scale", 1.0)
+    if isinstance(tex, str) and isinstance(scale, str):
+        raise UnsupportedError(f"{where}: a scale texture of two textures is not supported", desc.loc)
+    if isinstance(tex, str) or isinstance(scale, str):
+        base, factor = (tex, scale) if isinstance(tex, str) else (scale, tex)
+        return TextureSpec("scale", np.asarray(factor, dtype=np.float32), base=base)
+    return TextureSpec("scale", np.asarray(tex) * np.asarray(scale))

@@ -1,0 +1,149 @@
+"""Monte Carlo checks of a material's eval_pdf/sample pair, run through the same Warp functions
+the integrator calls, on parameter rows laid out by the material's own declaration."""
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+import warp as wp
+
+from renderer.materials import REGISTRY, device_layout, kind_id, material
+from renderer.materials.bsdf import BSDF, MAX_SLOTS, SPECULAR, Slots
+from renderer.sampling.warps import uniform_sphere
+
+
+def constant_rows(name: str, values: dict[str, Any]) -> tuple[np.ndarray, int]:
+    """Slot rows (MAX_SLOTS, 3) and flags of a material with constant values, as the upload lays
+    them out (declaration order, defaults, derived values): what load_bsdf would fill in."""
+    layout, flags = device_layout(material(name, **values))
+    rows = np.zeros((MAX_SLOTS, 3), dtype=np.float32)
+    for j, (_, v) in enumerate(layout):
+        if v is not None:
+            rows[j] = np.broadcast_to(np.asarray(v, dtype=np.float32), (3,))
+    return rows, flags
+
+
+def _bsdf_inputs(name: str, values: dict[str, Any]) -> list:
+    rows, flags = constant_rows(name, values)
+    return [Slots(*rows.ravel().tolist()), int(flags), kind_id(name)]
+
+
+def _unit(wo) -> wp.vec3:
+    wo = np.asarray(wo, dtype=np.float64)
+    return wp.vec3(*(wo / np.linalg.norm(wo)))
+
+
+@wp.func
+def _bsdf(p: Slots, flags: int, kind: int) -> BSDF:
+    b = BSDF()
+    b.kind = kind
+    b.p = p
+    b.flags = flags
+    return b
+
+
+@lru_cache(maxsize=None)
+def _kernel(name: str):
+    mod = REGISTRY[name]
+
+    @wp.kernel(module="unique")
+    def check(p: Slots, flags: int, kind: int, wo: wp.vec3, seed: int, out: wp.array(dtype=wp.vec3, ndim=2)):
+        i = wp.tid()
+        rng = wp.rand_init(seed, i)
+        b = _bsdf(p, flags, kind)
+        # uniform-sphere estimates of the integrals of pdf and of f |cos|
+        wi = uniform_sphere(wp.vec2(wp.randf(rng), wp.randf(rng)))
+        inv = 4.0 * 3.14159265358979
+        e = wp.static(mod.eval_pdf)(b, wo, wi)
+        out[i, 0] = wp.vec3(e.pdf * inv, 0.0, 0.0)
+        out[i, 1] = e.f * (wp.abs(wi[2]) * inv)
+        s = wp.static(mod.sample)(b, wo, wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)))
+        w = wp.vec3(0.0)
+        err = float(0.0)
+        if s.pdf > 0.0:
+            w = s.weight
+            if (s.flags & SPECULAR) == 0:
+                # the sample's pdf and weight must agree with eval_pdf for the direction it picked
+                es = wp.static(mod.eval_pdf)(b, wo, s.wi)
+                fe = es.f * (wp.abs(s.wi[2]) / s.pdf)
+                err = (wp.abs(es.pdf - s.pdf) / wp.max(s.pdf, 1.0e-6)
+                       + wp.length(fe - s.weight) / wp.max(wp.length(s.weight), 1.0e-6))
+        out[i, 2] = w
+        out[i, 3] = wp.vec3(err, float(s.flags), wp.where(s.pdf > 0.0, 1.0, 0.0))
+
+    return check
+
+
+def bsdf_moments(name: str, values: dict[str, Any], wo, n: int = 400_000, seed: int = 1) -> dict[str, np.ndarray]:
+    """Estimates of ∫pdf, ∫f|cos| (uniform sampling), E[sample weight] (importance sampling),
+    the largest sample/eval_pdf inconsistency and the lobe flags seen, for a material with the
+    given constant parameter values (defaults for the rest)."""
+    out = wp.zeros((n, 4), dtype=wp.vec3, device="cpu")
+    wp.launch(_kernel(name), dim=n, inputs=[*_bsdf_inputs(name, values), _unit(wo), seed, out], device="cpu")
+    o = out.numpy()
+    ok = o[:, 3, 2] > 0
+    return {"pdf_integral": o[:, 0, 0].mean(), "albedo_uniform": o[:, 1].mean(axis=0),
+            "albedo_sampled": o[:, 2].mean(axis=0), "max_inconsistency": o[:, 3, 0].max(),
+            "albedo_uniform_stderr": o[:, 1].std(axis=0) / np.sqrt(n),
+            "lobe_flags": set(o[ok, 3, 1].astype(int).tolist())}
+
+
+@lru_cache(maxsize=None)
+def _chi2_kernels(name: str):
+    mod = REGISTRY[name]
+
+    @wp.kernel(module="unique")
+    def draw(p: Slots, flags: int, kind: int, wo: wp.vec3, seed: int, out: wp.array(dtype=wp.vec4)):
+        i = wp.tid()
+        rng = wp.rand_init(seed, i)
+        b = _bsdf(p, flags, kind)
+        s = wp.static(mod.sample)(b, wo, wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)))
+        ok = 0.0
+        if s.pdf > 0.0 and (s.flags & SPECULAR) == 0:
+            ok = 1.0
+        out[i] = wp.vec4(s.wi[0], s.wi[1], s.wi[2], ok)
+
+    @wp.kernel(module="unique")
+    def density(p: Slots, flags: int, kind: int, wo: wp.vec3, dirs: wp.array(dtype=wp.vec3),
+                out: wp.array(dtype=float)):
+        i = wp.tid()
+        out[i] = wp.static(mod.eval_pdf)(_bsdf(p, flags, kind), wo, dirs[i]).pdf
+
+    return draw, density
+
+
+def chi2_pvalue(name: str, values: dict[str, Any], wo, n: int = 200_000, z_bins: int = 12, phi_bins: int = 24,
+                sub: int = 16, seed: int = 3) -> float:
+    """Pearson chi-square p-value that ``sample``'s directions follow ``eval_pdf``'s density:
+    counts in equal-solid-angle (cos θ, φ) cells against the pdf integrated over each cell on a
+    stratified sub x sub grid. Cells expecting fewer than 5 samples are pooled into one."""
+    from scipy.stats import chi2
+
+    draw, density = _chi2_kernels(name)
+    inputs = [*_bsdf_inputs(name, values), _unit(wo)]
+    out = wp.zeros(n, dtype=wp.vec4, device="cpu")
+    wp.launch(draw, dim=n, inputs=[*inputs, seed, out], device="cpu")
+    s = out.numpy()
+    s = s[s[:, 3] > 0]
+    zi = np.clip(((s[:, 2] + 1) / 2 * z_bins).astype(int), 0, z_bins - 1)
+    fi = np.clip(((np.arctan2(s[:, 1], s[:, 0]) % (2 * np.pi)) / (2 * np.pi) * phi_bins).astype(int), 0, phi_bins - 1)
+    observed = np.bincount(zi * phi_bins + fi, minlength=z_bins * phi_bins).astype(np.float64)
+    # cell integrals of the pdf: z and φ are uniform in solid angle, so a midpoint grid is fair
+    zz = -1 + (np.arange(z_bins * sub) + 0.5) * 2 / (z_bins * sub)
+    ff = (np.arange(phi_bins * sub) + 0.5) * 2 * np.pi / (phi_bins * sub)
+    Z, F = np.meshgrid(zz, ff, indexing="ij")
+    r = np.sqrt(np.maximum(0, 1 - Z ** 2))
+    dirs = np.stack([r * np.cos(F), r * np.sin(F), Z], -1).reshape(-1, 3).astype(np.float32)
+    pdf = wp.zeros(len(dirs), dtype=float, device="cpu")
+    wp.launch(density, dim=len(dirs), inputs=[*inputs, wp.array(dirs, dtype=wp.vec3, device="cpu"), pdf],
+              device="cpu")
+    cell_area = 4 * np.pi / (z_bins * phi_bins * sub * sub)
+    integral = (pdf.numpy().reshape(z_bins, sub, phi_bins, sub) * cell_area).sum(axis=(1, 3)).ravel()
+    expected = integral / integral.sum() * observed.sum()
+    big = expected >= 5
+    obs = np.append(observed[big], observed[~big].sum())
+    exp = np.append(expected[big], expected[~big].sum())
+    keep = exp > 0
+    stat = ((obs[keep] - exp[keep]) ** 2 / exp[keep]).sum()
+    return float(chi2.sf(stat, keep.sum() - 1))
