@@ -22,6 +22,8 @@ from renderer.settings import RenderSettings
 
 @dataclass
 class RenderStats:
+    """What a render did and how fast, for the CLI's summary line and the EXR header."""
+
     spp: int = 0
     seconds: float = 0.0
     compile_seconds: float = 0.0
@@ -31,7 +33,7 @@ class RenderStats:
     height: int = 0
     interrupted: bool = False
     peak_memory_mb: float = 0.0
-    warnings: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)     # the scene's, each once: the CLI prints them
 
     @property
     def samples_per_second(self) -> float:
@@ -82,7 +84,7 @@ class RenderSession:
         t0 = time.perf_counter()
         wp.load_module(self.kernel.module, device=device)
         self.stats = RenderStats(width=W, height=H, compile_seconds=time.perf_counter() - t0,
-                                 warnings=list(scene.warnings))
+                                 warnings=list(dict.fromkeys(scene.warnings)))   # each once
         n_threads = max(1, min(threads or default_threads(device), H))
         self.bands = [b for b in np.array_split(np.arange(H), n_threads) if len(b)]
         self._fingerprint: str | None = None

@@ -47,10 +47,6 @@ class RenderSettings:
         except ValueError as e:
             raise RenderError(str(e)) from None
 
-    @property
-    def spectral_samples(self) -> int:
-        return thin_film_samples(self.thin_film)
-
 
 def settings_for(scene: SceneDescription, seed: int | None = None, width: int | None = None,
                  height: int | None = None, max_depth: int | None = None, nee: bool = True,

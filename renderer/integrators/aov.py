@@ -44,7 +44,7 @@ def aov_kernel(features: Features) -> wp.Kernel:
         hits = int(0)
         for k in range(n_samples):
             rng = sample_rng(seed ^ 0x5A5A5A5, k, pixel)
-            jit = wp.vec2(wp.randf(rng), wp.randf(rng))  # not rand2: Warp passes rng by value
+            jit = wp.vec2(wp.randf(rng), wp.randf(rng))  # drawn inline: Warp passes rng by value
             ray = generate_ray(scene.cam, float(px) + jit[0], float(py) + jit[1],
                                wp.vec2(wp.randf(rng), wp.randf(rng)))
             hit = intersect(scene.geo, ray.o, ray.d, 1.0e30)

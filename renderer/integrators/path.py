@@ -61,7 +61,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
         sel = 1.0 / float(wp.max(n_lights, 1))
         n_rays = int(0)
         rng = sample_rng(seed, sample_index, pixel)
-        jit = wp.vec2(wp.randf(rng), wp.randf(rng))  # not rand2: Warp passes rng by value
+        jit = wp.vec2(wp.randf(rng), wp.randf(rng))  # drawn inline: Warp passes rng by value
         ray = generate_ray(scene.cam, float(px) + jit[0], float(py) + jit[1],
                            wp.vec2(wp.randf(rng), wp.randf(rng)))
         o = ray.o

@@ -110,8 +110,8 @@ class Builder:
     def check_known(self, d: Directive) -> str:
         name = str(d.args[0])
         if name not in KNOWN_NAMES[d.name]:
-            raise SceneError(f'unknown {d.name} "{name}" (pbrt-v4 knows {", ".join(sorted(KNOWN_NAMES[d.name]))})',
-                             d.loc)
+            known = ", ".join(sorted(KNOWN_NAMES[d.name]))
+            raise UnsupportedError(f'unknown {d.name} "{name}" (pbrt-v4 knows {known})', d.loc)
         return name
 
     def warn_unused(self, d: Directive) -> None:

@@ -37,8 +37,8 @@ def read_texture(desc: TextureDesc) -> TextureSpec:
     for the builder's unused-parameter warning."""
     where = f'Texture "{desc.name}"'
     if desc.kind not in TEXTURE_CLASSES:
-        raise SceneError(f'{where}: unknown texture class "{desc.kind}" (pbrt-v4 knows '
-                         f'{", ".join(sorted(TEXTURE_CLASSES))})', desc.loc)
+        raise UnsupportedError(f'{where}: unknown texture class "{desc.kind}" (pbrt-v4 knows '
+                               f'{", ".join(sorted(TEXTURE_CLASSES))})', desc.loc)
     if desc.kind not in SUPPORTED_TEXTURES:
         raise UnsupportedError(f'{where}: class "{desc.kind}" is not supported (supported: '
                                f'{", ".join(sorted(SUPPORTED_TEXTURES))})', desc.loc)

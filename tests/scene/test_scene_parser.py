@@ -15,6 +15,7 @@ from renderer.scene.builder import UNSUPPORTED, Builder
 from renderer.scene.params import Param, ParamSet
 from renderer.scene.parser import SIGNATURES
 from renderer.scene.shapes import bilinear_mesh, disk, sphere
+from renderer.scene.texture_params import read_texture
 from renderer.scene.tokenizer import tokenize
 
 DATA = Path(__file__).parents[1] / "data" / "scenes"
@@ -328,6 +329,18 @@ def test_named_materials_and_textures(tmp_path):
     assert gold.values == {"displacement": TextureRef("bumps")}     # plain values, read at load time
     assert [s.materials[sh.material].kind for sh in s.shapes] == ["diffuse", "conductor", "diffuse"]
     assert not [w for w in s.warnings if "parameter" in w]
+
+
+def test_texture_parameters_are_read_and_checked_at_load_time(tmp_path):
+    s = load(tmp_path, HEAD + 'Texture "c" "spectrum" "checkerboard" "rgb tex1" [1 0 0] "float uscale" 4 '
+                              '"float bumpiness" 2\n'
+                              'Texture "s" "spectrum" "scale" "texture tex" "c" "float scale" 0.5\n')
+    assert s.warnings[0] == (f'{tmp_path / "scene.pbrt"}:3: Texture "c": parameter "float bumpiness" is not '
+                             'supported and was ignored')
+    checks, scaled = read_texture(s.textures["c"]), read_texture(s.textures["s"])
+    np.testing.assert_array_equal(checks.value, [1.0, 0.0, 0.0])
+    assert checks.uvmap == (4.0, 1.0, 0.0, 0.0)
+    assert scaled.base == "c" and np.all(scaled.value == 0.5)
 
 
 # --- shapes -----------------------------------------------------------------------------------------
