@@ -9,8 +9,10 @@ from __future__ import annotations
 import argparse
 import signal
 import sys
+import tempfile
 import time
 import traceback
+import warnings
 from pathlib import Path
 
 
@@ -22,9 +24,29 @@ def _resolution(text: str) -> tuple[int, int]:
         w, h = (int(x) for x in text.lower().split("x"))
     except ValueError:
         raise argparse.ArgumentTypeError(f"resolution must look like 640x360, got {text!r}") from None
-    if w < 1 or h < 1:
-        raise argparse.ArgumentTypeError(f"resolution must be positive, got {text!r}")
+    from renderer.errors import RenderError
+    from renderer.settings import check_resolution
+
+    try:
+        check_resolution(w, h)
+    except RenderError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
     return w, h
+
+
+#: PNG exposure beyond this many stops (a factor of 2^64 either way) is surely a typo.
+MAX_EXPOSURE = 64.0
+
+
+def _exposure(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"exposure must be a number of stops, got {text!r}") from None
+    if not abs(v) <= MAX_EXPOSURE:                  # also refuses nan
+        raise argparse.ArgumentTypeError(f"exposure must be between -{MAX_EXPOSURE:g} and {MAX_EXPOSURE:g} stops, "
+                                         f"got {text!r}")
+    return v
 
 
 def _aov_list(text: str) -> tuple[str, ...]:
@@ -47,7 +69,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--device", default="cpu", help="Warp device: cpu, cuda, cuda:N (default: cpu)")
     p.add_argument("--seed", type=int, help="random seed (default: the scene's Sampler seed)")
     p.add_argument("--max-depth", type=int, help="maximum path depth (default: the scene's Integrator maxdepth)")
-    p.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops (default: 0)")
+    p.add_argument("--exposure", type=_exposure, default=0.0, help="PNG exposure in stops (default: 0)")
     p.add_argument("--threads", type=int, help="CPU worker threads (default: all cores)")
     p.add_argument("--no-nee", action="store_true", help="BSDF sampling only (no light sampling): for checks")
     p.add_argument("--rr-depth", type=int, help="Russian roulette from this path depth on (default 4; -1: off)")
@@ -124,6 +146,22 @@ class _StopSignals:
             signal.signal(s, h)
 
 
+def _check_writable(path: Path, what: str) -> None:
+    """Fail before the first pass, not after the last, when ``path`` cannot be written: its folder
+    is made (as the writers would) and a temporary file is created and removed there."""
+    from renderer.errors import RenderError
+    from renderer.scene.parser import shown_path
+
+    try:
+        if path.is_dir():
+            raise IsADirectoryError(f"{shown_path(path)} is a folder")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=path.parent):
+            pass
+    except OSError as e:
+        raise RenderError(f"cannot write the {what} {shown_path(path)}: {e.strerror or e}") from None
+
+
 def write_outputs(path: Path, img, layers: dict, exposure: float, header: dict) -> None:
     from renderer.integrators.aov import AOV_CHANNELS
     from renderer.io.images import write_exr, write_png
@@ -140,18 +178,28 @@ def write_outputs(path: Path, img, layers: dict, exposure: float, header: dict) 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    # colour-science warns at import that matplotlib (plotting, unused here) is missing: the user
+    # of the command should see only its own messages
+    warnings.filterwarnings("ignore", message='"Matplotlib" related API features are not available')
     from renderer.errors import RenderError
 
     try:
         from renderer.api import load_scene, open_session, settings_for
         from renderer.io.checkpoint import save_checkpoint
         from renderer.io.metrics import relative_mse
+        from renderer.scene.parser import shown_path
         from renderer.session import RenderSession
 
+        for what, path in (("reference image", args.reference), ("checkpoint", args.resume)):
+            if path is not None and not path.is_file():
+                raise RenderError(f"{what} not found: {path}")
         scene = load_scene(args.scene)
         out = args.output or Path(scene.film.filename)
         if out.suffix.lower() not in (".exr", ".png"):
-            raise RenderError(f"output must end in .exr or .png, got {out}")
+            source = "" if args.output else " (the scene's Film \"filename\"; choose another with -o)"
+            raise RenderError(f"output must end in .exr or .png, got {shown_path(out)}{source}")
+        if args.aov and out.suffix.lower() != ".exr":
+            raise RenderError(f"--aov layers need an .exr output, not {shown_path(out)}")
         if args.error_log and not args.reference:
             raise RenderError("--error-log needs --reference REF.exr")
         w, h = args.res or (None, None)
@@ -165,6 +213,9 @@ def main(argv: list[str] | None = None) -> int:
             if ref.shape[:2] != (settings.height, settings.width):
                 raise RenderError(f"reference {args.reference} is {ref.shape[1]}x{ref.shape[0]}, "
                                   f"not {settings.width}x{settings.height}")
+        for what, path in (("output", out), ("checkpoint", args.checkpoint), ("error log", args.error_log)):
+            if path is not None:
+                _check_writable(path, what)
         session = open_session(scene, settings, device=args.device, threads=args.threads, resume=args.resume)
         for w in session.stats.warnings:
             print(f"warning: {w}", file=sys.stderr)
@@ -220,7 +271,8 @@ def main(argv: list[str] | None = None) -> int:
               f"{stats.rays_per_second / 1e6:.3f} M rays/s, peak memory {stats.peak_memory_mb:.0f} MB",
               file=sys.stderr)
         if stats.spp < spp:
-            why = signal.Signals(stop.signum).name if stop.signum else ("time limit" if args.time_limit else "interrupt")
+            limited = "time limit" if args.time_limit is not None else "interrupt"
+            why = signal.Signals(stop.signum).name if stop.signum else limited
             print(f"render: stopped by {why} at {stats.spp}/{spp} spp", file=sys.stderr)
         if stop.signum is not None:
             return 128 + stop.signum

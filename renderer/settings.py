@@ -3,10 +3,13 @@ kernels, so the CLI, the API, checkpoints and benchmarks can all read it cheaply
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from renderer.color.spectral import parse_mode
 from renderer.errors import RenderError
-from renderer.scene.description import SceneDescription
+
+if TYPE_CHECKING:                  # the scene builder checks its Film with check_resolution below
+    from renderer.scene.description import SceneDescription
 
 #: Depth from which Russian roulette may end a path by default; a negative value turns it off.
 #: pbrt-v4 starts after the second bounce (2); `benchmarks/study.py` measured 4 as 2.4x more
@@ -15,6 +18,20 @@ from renderer.scene.description import SceneDescription
 RR_DEPTH = 4
 #: The thin-film colour mode by default: 32 jittered wavelengths per evaluation (docs/thinfilm.md).
 THIN_FILM_MODE = "spectral:32"
+#: The largest film: 2^26 pixels (8192x8192) keeps the film's sums, counters and the image under
+#: about 7 GB of host memory and every launch far inside Warp's 32-bit launch dimensions.
+MAX_PIXELS = 1 << 26
+#: Seeds and depths reach the kernels as 32-bit integers: larger values would silently wrap.
+INT32_MIN, INT32_MAX = -(1 << 31), (1 << 31) - 1
+
+
+def check_resolution(width: int, height: int) -> None:
+    """Refuse a film that is empty or beyond :data:`MAX_PIXELS`, before anything is allocated."""
+    if width < 1 or height < 1:
+        raise RenderError(f"resolution must be positive, got {width}x{height}")
+    if width * height > MAX_PIXELS:
+        raise RenderError(f"resolution {width}x{height} has {width * height:,} pixels, more than the limit of "
+                          f"{MAX_PIXELS:,} (8192x8192)")
 
 
 def thin_film_samples(mode: str) -> int:
@@ -38,10 +55,12 @@ class RenderSettings:
     thin_film: str = THIN_FILM_MODE     # thin-film colour mode: rgb3 or spectral:N
 
     def __post_init__(self) -> None:
-        if self.width < 1 or self.height < 1:
-            raise RenderError(f"resolution must be positive, got {self.width}x{self.height}")
-        if self.max_depth < 0:
-            raise RenderError(f"max depth must be >= 0, got {self.max_depth}")
+        check_resolution(self.width, self.height)
+        if not 0 <= self.max_depth <= INT32_MAX:
+            raise RenderError(f"max depth must be between 0 and {INT32_MAX}, got {self.max_depth}")
+        for what, v in (("seed", self.seed), ("Russian roulette depth", self.rr_depth)):
+            if not INT32_MIN <= v <= INT32_MAX:
+                raise RenderError(f"{what} must be a 32-bit integer ({INT32_MIN} to {INT32_MAX}), got {v}")
         try:
             thin_film_samples(self.thin_film)
         except ValueError as e:

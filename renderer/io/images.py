@@ -57,10 +57,22 @@ def read_exr(path: str | Path) -> tuple[dict[str, np.ndarray], dict[str, object]
 
 def read_image(path: str | Path, *, srgb: bool | None = None) -> np.ndarray:
     """Any supported image as linear float32 (H, W, C). 8-bit images are decoded from sRGB unless
-    ``srgb`` is False; EXR and 16-bit/float images are taken as linear."""
+    ``srgb`` is False; EXR and 16-bit/float images are taken as linear. A file the decoders refuse
+    (empty, truncated, garbage, a decompression bomb) raises OSError naming the file."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"image not found: {path}")
+    try:
+        return _decoded(path, srgb)
+    except MemoryError:
+        raise
+    except Exception as e:  # each decoder has its own exception types; all mean "not a readable image"
+        raise OSError(f"cannot read image {path}: {e or type(e).__name__}") from e
+
+
+def _decoded(path: Path, srgb: bool | None) -> np.ndarray:
     from renderer.color.rgb import srgb_to_linear
 
-    path = Path(path)
     if path.suffix.lower() == ".exr":
         chans, _ = read_exr(path)
         order = [c for c in ("R", "G", "B", "A") if c in chans] or sorted(chans)

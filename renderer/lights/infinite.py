@@ -82,7 +82,10 @@ def entry(light: LightDesc, tris: np.ndarray | None) -> LightEntry:
                    to_world=R, to_light=np.linalg.inv(R), escapes=True)
     if v["filename"] is None:
         return e
-    image = read_image(_image_path(v, light.loc), srgb=True)
+    try:
+        image = read_image(_image_path(v, light.loc), srgb=True)
+    except OSError as e:
+        raise SceneError(f"environment image: {e}", light.loc) from e
     mapping = _mapping(image, light.loc)
     rgb = image[..., :3] if image.shape[2] >= 3 else np.repeat(image[..., :1], 3, axis=2)
     if not np.all(np.isfinite(rgb)) or np.any(rgb < 0):

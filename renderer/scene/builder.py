@@ -15,7 +15,7 @@ from typing import Callable, Iterable
 import numpy as np
 
 from renderer import lights, materials
-from renderer.errors import Location, SceneError, SceneErrors, UnsupportedError
+from renderer.errors import Location, RenderError, SceneError, SceneErrors, UnsupportedError
 from renderer.scene.description import (CameraDesc, FilmDesc, InstanceSetDesc, IntegratorDesc, MeshDesc, SamplerDesc,
                                         SceneDescription, ShapeDesc, TextureDesc)
 from renderer.scene.params import ParamSet
@@ -25,6 +25,7 @@ from renderer.scene.shapes import bilinear_mesh, disk, sphere, triangle_mesh
 from renderer.scene.state import GraphicsState, ObjectDefinition, SavedState
 from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, UNSUPPORTED, WORLD_ONLY
 from renderer.scene.texture_params import read_texture
+from renderer.settings import check_resolution
 from renderer.scene.transform import (from_pbrt_matrix, inverse, look_at, read_instance_transforms, rotate, scale,
                                       swaps_handedness, transformed_mesh, translate)
 
@@ -127,7 +128,8 @@ class Builder:
             self.state.ctm = m
 
     def _concat(self, m: np.ndarray) -> None:
-        self._set_ctm(self.state.ctm @ m)
+        with np.errstate(over="ignore", invalid="ignore"):     # an overflow is refused where the CTM is used
+            self._set_ctm(self.state.ctm @ m)
 
     def Identity(self, d: Directive) -> None:
         self._set_ctm(np.eye(4))
@@ -194,6 +196,10 @@ class Builder:
         p = d.params
         self.scene.film = FilmDesc(p.int("xresolution", 1280, min=1), p.int("yresolution", 720, min=1),
                                    p.string("filename", "pbrt.exr"))
+        try:
+            check_resolution(self.scene.film.width, self.scene.film.height)
+        except RenderError as e:
+            raise SceneError(f"Film: {e}", d.loc) from None
         self.warn_unused(d)
 
     def Sampler(self, d: Directive) -> None:
@@ -317,10 +323,12 @@ class Builder:
     # -- lights: each light module reads its own parameters (renderer.lights)
 
     def AreaLightSource(self, d: Directive) -> None:
+        inverse(self.state.ctm, d.name, d.loc)
         self.state.area_light = lights.describe(d.name, str(d.args[0]), d.params, self.state.ctm, d.loc)
         self.warn_unused(d)
 
     def LightSource(self, d: Directive) -> None:
+        inverse(self.state.ctm, d.name, d.loc)
         self.scene.lights.append(lights.describe(d.name, str(d.args[0]), d.params, self.state.ctm, d.loc))
         self.warn_unused(d)
 
@@ -338,6 +346,8 @@ class Builder:
             self.warn(d.loc, f'Shape "{name}" has no triangles; skipped')
             return
         ctm = self.state.ctm
+        inverse(ctm, f'Shape "{name}"', d.loc)
+        self._check_single_precision(mesh, ctm, name, d.loc)
         obj = self.current_object
         if obj is not None:
             if self.state.area_light is not None:
@@ -354,6 +364,17 @@ class Builder:
             obj.shapes.append(index)
         else:
             self.scene.instance_sets.append(InstanceSetDesc([index], ctm[None].copy(), d.loc))
+
+    @staticmethod
+    def _check_single_precision(mesh: MeshDesc, ctm: np.ndarray, name: str, loc: Location) -> None:
+        """The device works in float32: a shape placed beyond its range would silently vanish."""
+        lo, hi = mesh.positions.min(axis=0), mesh.positions.max(axis=0)
+        corners = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+        with np.errstate(over="ignore", invalid="ignore"):
+            world = (corners @ ctm.T).astype(np.float32)
+        if not np.all(np.isfinite(world)):
+            raise SceneError(f'Shape "{name}": its world-space position is beyond single precision (float32) '
+                             "range", loc)
 
     def ObjectBegin(self, d: Directive) -> None:
         """Like pbrt-v4, ObjectBegin also saves the graphics state, which ObjectEnd restores."""

@@ -46,6 +46,7 @@ SIGNATURES: dict[str, Signature] = {
 #: pbrt-v4 spellings that mean the same as a type in PARAM_TYPES.
 _TYPE_ALIASES = {"point": "point3", "vector": "vector3", "normal": "normal3", "color": "rgb"}
 _NUMERIC_TYPES = {"integer", "float", "point2", "vector2", "point3", "vector3", "normal3", "rgb", "blackbody"}
+_INT32_MIN, _INT32_MAX = -(1 << 31), (1 << 31) - 1
 _TUPLE_SIZE = {"point2": 2, "vector2": 2, "point3": 3, "vector3": 3, "normal3": 3, "rgb": 3}
 
 
@@ -57,26 +58,76 @@ class Directive:
     loc: Location = Location("", 0)
 
 
-def parse_file(path: str | Path, chain: tuple[Path, ...] = (), included_at: Location | None = None
-               ) -> Iterator[Directive]:
+#: Bounds on includes, as pbrt has none: nesting deeper than this is almost surely a mistake, and
+#: a file including the next one twice, thirty deep, would otherwise expand to 2^30 files.
+MAX_INCLUDE_DEPTH = 100
+MAX_INCLUDED_FILES = 10_000
+MAX_INCLUDED_BYTES = 1 << 30
+#: Longer paths are shown shortened in messages (a path is never longer than the OS allows anyway).
+_MAX_SHOWN_PATH = 200
+
+
+@dataclass
+class _IncludeBudget:
+    """What the includes of one top-level file have used so far, shared by every nested file."""
+
+    files: int = 0
+    bytes: int = 0
+
+
+def shown_path(path: str | Path) -> str:
+    """A path as messages show it: a hostile 1 MB name is cut to its start and end."""
+    s = str(path)
+    return s if len(s) <= _MAX_SHOWN_PATH else f"{s[:100]}...{s[-60:]} ({len(s)} characters)"
+
+
+def require_file(path: Path, loc: Location | None, what: str) -> Path:
+    """``path`` when it is a file; else a MissingFileError, or a SceneError for a path the system
+    refuses outright (a name too long), each showing the path shortened."""
+    try:
+        found = path.is_file()
+    except OSError as e:
+        raise SceneError(f"cannot open {what} {shown_path(path)}: {e.strerror or e}", loc) from None
+    if not found:
+        raise MissingFileError(shown_path(path), loc, what)
+    return path
+
+
+def parse_file(path: str | Path, chain: tuple[Path, ...] = (), included_at: Location | None = None,
+               budget: _IncludeBudget | None = None) -> Iterator[Directive]:
     """Yield the directives of ``path`` with its includes expanded. Include paths resolve against
     the folder of the file that names them; ``chain`` (the files including this one) catches a
-    file that includes itself, directly or not; ``included_at`` locates errors about the file."""
+    file that includes itself, directly or not; ``included_at`` locates errors about the file;
+    ``budget`` bounds the total number and size of included files."""
     path = Path(path)
-    if not path.is_file():
-        raise MissingFileError(path, included_at, "scene file")
+    budget = _IncludeBudget() if budget is None else budget
+    text = _read_scene_text(path, included_at, budget)
     key = path.resolve()
     if key in chain:
         raise SceneError(f"include cycle: {' -> '.join(p.name for p in (*chain, key))}", included_at)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as e:
-        raise SceneError(f"cannot read {path}: {e}", included_at) from e
+    if len(chain) >= MAX_INCLUDE_DEPTH:
+        raise SceneError(f"includes nested more than {MAX_INCLUDE_DEPTH} deep", included_at)
     for d in _Parser(tokenize(text, str(path))).directives():
         if d.name in ("Include", "Import"):
-            yield from parse_file(path.parent / str(d.args[0]), (*chain, key), d.loc)
+            budget.files += 1
+            if budget.files > MAX_INCLUDED_FILES:
+                raise SceneError(f"more than {MAX_INCLUDED_FILES} files included in all (does a file include "
+                                 "another several times, over and over?)", d.loc)
+            yield from parse_file(path.parent / str(d.args[0]), (*chain, key), d.loc, budget)
         else:
             yield d
+
+
+def _read_scene_text(path: Path, included_at: Location | None, budget: _IncludeBudget) -> str:
+    """The file's text; bytes that are not UTF-8 are kept as surrogates for the tokenizer to locate."""
+    try:
+        size = require_file(path, included_at, "scene file").stat().st_size
+        budget.bytes += size
+        if budget.bytes > MAX_INCLUDED_BYTES:
+            raise SceneError(f"scene files exceed {MAX_INCLUDED_BYTES >> 20} MiB in all", included_at)
+        return path.read_bytes().decode("utf-8", errors="surrogateescape")
+    except OSError as e:
+        raise SceneError(f"cannot read {shown_path(path)}: {e.strerror or e}", included_at) from None
 
 
 class _Parser:
@@ -182,6 +233,8 @@ def _values(ptype: str, name: str, tokens: list[Token], loc: Location) -> list:
                 raise bad(t, "numbers")
             if ptype == "integer" and not isinstance(t.value, int):
                 raise bad(t, "integers")
+            if ptype == "integer" and not _INT32_MIN <= t.value <= _INT32_MAX:
+                raise bad(t, "32-bit integers (as pbrt's are)")
         if len(tokens) % _TUPLE_SIZE.get(ptype, 1):
             raise SceneError(f'parameter "{name}" ({ptype}) needs a multiple of {_TUPLE_SIZE[ptype]} values, '
                              f'got {len(tokens)}', loc)

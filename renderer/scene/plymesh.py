@@ -6,8 +6,9 @@ from pathlib import Path
 import numpy as np
 import plyfile
 
-from renderer.errors import Location, MissingFileError, SceneError
+from renderer.errors import Location, SceneError
 from renderer.scene.description import MeshDesc
+from renderer.scene.parser import require_file
 from renderer.scene.params import ParamSet
 from renderer.scene.shapes import validated_mesh
 
@@ -21,14 +22,13 @@ def ply_mesh(params: ParamSet, loc: Location) -> MeshDesc:
     if not name:
         raise SceneError('plymesh: "string filename" is required', loc)
     path = Path(loc.file).parent / name
-    if not path.is_file():
-        raise MissingFileError(path, loc, "PLY mesh")
-    return read_ply(path, loc)
+    return read_ply(require_file(path, loc, "PLY mesh"), loc)
 
 
 def read_ply(path: Path, loc: Location) -> MeshDesc:
     """Positions, optional nx/ny/nz normals and UVs; polygons are fanned into triangles (a quad
     becomes (0, 1, 2), (0, 2, 3), which keeps its winding). Errors name the PLY file and ``loc``."""
+    _check_counts(path, loc)
     try:
         ply = plyfile.PlyData.read(str(path))
     except (plyfile.PlyParseError, plyfile.PlyHeaderParseError, ValueError, OSError) as e:
@@ -48,6 +48,38 @@ def read_ply(path: Path, loc: Location) -> MeshDesc:
     UV = next((uv for keys in UV_NAMES if (uv := columns(*keys)) is not None), None)
     F = _faces(ply, path, loc)
     return validated_mesh(P, F, N, UV, loc, f"plymesh {path.name}")
+
+
+#: Bytes of each PLY scalar type, by every name the format allows.
+_SIZES = {**dict.fromkeys(("char", "uchar", "int8", "uint8"), 1), **dict.fromkeys(("short", "ushort", "int16",
+          "uint16"), 2), **dict.fromkeys(("int", "uint", "float", "int32", "uint32", "float32"), 4),
+          **dict.fromkeys(("double", "float64"), 8)}
+_MAX_HEADER = 1 << 16
+
+
+def _check_counts(path: Path, loc: Location) -> None:
+    """Refuse a header whose element counts need more bytes than the file has, before plyfile
+    allocates for them: each element takes at least its scalars' bytes (binary) or two characters
+    per property (ASCII: a digit and a separator); a list takes at least its count."""
+    with open(path, "rb") as f:
+        head = f.read(_MAX_HEADER)
+    end = head.find(b"end_header")
+    if not head.startswith(b"ply") or end < 0:
+        raise SceneError(f"{path}: not a readable PLY file (no 'ply ... end_header' header in its first 64 KiB)", loc)
+    lines = head[:end].decode("ascii", errors="replace").splitlines()
+    ascii_format = any(ln.split()[:2] == ["format", "ascii"] for ln in lines)
+    counts: list[list[int]] = []
+    for words in (ln.split() for ln in lines):
+        if words[:1] == ["element"] and len(words) == 3 and words[2].isdigit():
+            counts.append([int(words[2]), 0])
+        elif words[:1] == ["property"] and counts and len(words) >= 3:
+            size = _SIZES.get(words[2] if words[1] == "list" else words[1], 1)
+            counts[-1][1] += 2 if ascii_format else size
+    need = sum(n * max(per, 1) for n, per in counts)
+    have = path.stat().st_size - end
+    if need > have:
+        raise SceneError(f"{path}: the header declares {', '.join(str(n) for n, _ in counts)} elements, "
+                         f"needing at least {need} bytes, but the file holds {have}", loc)
 
 
 def _faces(ply: plyfile.PlyData, path: Path, loc: Location) -> np.ndarray:

@@ -3,13 +3,15 @@
 file:line before any device work, and the device texture table builds from the same record."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from renderer.errors import MissingFileError, SceneError, UnsupportedError
+from renderer.errors import Location, SceneError, UnsupportedError
 from renderer.scene.description import TextureDesc
+from renderer.scene.parser import require_file
 from renderer.scene.support import SUPPORTED_TEXTURES, TEXTURE_CLASSES
 
 #: imagemap "wrap" modes, numbered as the device's texel lookup reads them
@@ -66,9 +68,9 @@ def _imagemap(desc: TextureDesc, where: str, uvmap: tuple[float, float, float, f
     if not fname:
         raise SceneError(f'{where}: imagemap needs "string filename"', desc.loc)
     path = (desc.base_dir / fname).resolve()
-    if not path.is_file():
-        raise MissingFileError(path, desc.loc, "texture image")
+    require_file(path, desc.loc, "texture image")
     encoding = p.string("encoding", "linear" if path.suffix.lower() in (".exr", ".hdr", ".pfm") else "sRGB")
+    check_encoding(encoding, where, desc.loc)
     wrap = p.string("wrap", "repeat")
     if wrap not in WRAP:
         raise SceneError(f'{where}: imagemap wrap must be one of {sorted(WRAP)}, got "{wrap}"', desc.loc)
@@ -77,6 +79,21 @@ def _imagemap(desc: TextureDesc, where: str, uvmap: tuple[float, float, float, f
         raise UnsupportedError(f'{where}: imagemap "invert" is not supported', desc.loc)
     p.string("filter")                     # the filter is always bilinear; asking for another is fine
     return TextureSpec("imagemap", scale, uvmap=uvmap, path=path, encoding=encoding, wrap=wrap)
+
+
+def check_encoding(encoding: str, where: str, loc: Location) -> None:
+    """pbrt-v4's image encodings: "sRGB", "linear" or "gamma G" with G a positive finite number."""
+    words = encoding.split(" ")
+    if encoding.lower() in ("srgb", "linear"):
+        return
+    if len(words) == 2 and words[0] == "gamma":
+        try:
+            g = float(words[1])
+        except ValueError:
+            g = float("nan")
+        if math.isfinite(g) and g > 0.0:
+            return
+    raise SceneError(f'{where}: encoding must be "sRGB", "linear" or "gamma G" with G > 0, got "{encoding}"', loc)
 
 
 def _scale(desc: TextureDesc, where: str) -> TextureSpec:

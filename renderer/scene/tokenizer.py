@@ -12,6 +12,8 @@ _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 _INTEGER = re.compile(r"[+-]?\d+")
 _ESCAPES = {"b": "\b", "f": "\f", "n": "\n", "r": "\r", "t": "\t", "\\": "\\", "'": "'", '"': '"'}
 _DELIMITERS = ' \t\r\n"[]#'
+#: Bytes that are not UTF-8, as ``errors="surrogateescape"`` decodes them: allowed in comments only.
+_UNDECODED = re.compile("[\udc80-\udcff]")
 
 
 @dataclass(frozen=True)
@@ -49,13 +51,28 @@ def tokenize(text: str, file: str) -> Iterator[Token]:
                 j += 1
             word = text[i:j]
             loc = Location(file, line)
-            if _INTEGER.fullmatch(word):
-                yield Token("number", int(word), loc)
-            elif _NUMBER.fullmatch(word):
-                yield Token("number", float(word), loc)
+            if _NUMBER.fullmatch(word):
+                yield Token("number", _number(word, loc), loc)
             else:
-                yield Token("word", word, loc)
+                yield Token("word", _checked_text(word, loc), loc)
             i = j
+
+
+def _number(word: str, loc: Location) -> int | float:
+    """An int when written without a fraction or exponent, else a float; either must be finite
+    as a double (``1e400`` or a 400-digit integer is refused here, with its line)."""
+    value = float(word)
+    if value in (float("inf"), float("-inf")):
+        shown = word if len(word) <= 40 else f"{word[:20]}...({len(word)} characters)"
+        raise SceneError(f"number {shown} is out of range (beyond double precision)", loc)
+    return int(word) if _INTEGER.fullmatch(word) else value
+
+
+def _checked_text(value: str, loc: Location) -> str:
+    """Refuse bytes that are not UTF-8 outside comments (pbrt reads UTF-8; Latin-1 in comments is fine)."""
+    if _UNDECODED.search(value):
+        raise SceneError("the file is not valid UTF-8 here (only comments may hold other bytes)", loc)
+    return value
 
 
 def _string(text: str, start: int, loc: Location) -> tuple[int, str]:
@@ -65,7 +82,7 @@ def _string(text: str, start: int, loc: Location) -> tuple[int, str]:
     while i < len(text):
         c = text[i]
         if c == '"':
-            return i + 1, "".join(out)
+            return i + 1, _checked_text("".join(out), loc)
         if c == "\n":
             raise SceneError("unterminated string (a string may not span lines)", loc)
         if c == "\\":

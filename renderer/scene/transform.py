@@ -6,13 +6,16 @@ camera-from-world in pbrt's left-handed camera frame (+z forward, +y up, +x = up
 from __future__ import annotations
 
 import math
+import zipfile
 from dataclasses import replace
 from pathlib import Path
+from typing import BinaryIO
 
 import numpy as np
 
-from renderer.errors import Location, MissingFileError, SceneError
+from renderer.errors import Location, SceneError
 from renderer.scene.description import MeshDesc
+from renderer.scene.parser import require_file
 
 
 def translate(d: np.ndarray) -> np.ndarray:
@@ -76,12 +79,15 @@ def swaps_handedness(m: np.ndarray) -> bool:
 
 
 def inverse(m: np.ndarray, what: str, loc: Location) -> np.ndarray:
+    """The inverse of a transform that must be invertible where ``what`` uses it."""
+    if not np.all(np.isfinite(m)):
+        raise SceneError(f"{what}: the current transform has infinite or NaN entries", loc)
     try:
         inv = np.linalg.inv(m)
     except np.linalg.LinAlgError:
         inv = None
     if inv is None or not np.all(np.isfinite(inv)):
-        raise SceneError(f"{what}: the current transform is singular", loc)
+        raise SceneError(f"{what}: the current transform is singular (a zero Scale or a degenerate matrix)", loc)
     return inv
 
 
@@ -98,26 +104,53 @@ def transformed_mesh(mesh: MeshDesc, m: np.ndarray) -> MeshDesc:
     return replace(mesh, positions=P, normals=N)
 
 
+#: More instances than this in one transforms file (2 GiB of float64 matrices) are refused.
+MAX_INSTANCES = 1 << 24
+
+
 def read_instance_transforms(path: Path, loc: Location) -> np.ndarray:
     """(N, 4, 4) instance matrices from a ``.npy`` (the array itself) or ``.npz`` (its array
-    ``transforms``) file: our extension for placing many instances of one object."""
-    if not path.is_file():
-        raise MissingFileError(path, loc, "instance transforms")
+    ``transforms``) file: our extension for placing many instances of one object. The array's
+    header is checked against the bytes that hold it before anything is allocated."""
+    require_file(path, loc, "instance transforms")
     try:
-        data = np.load(path, allow_pickle=False)
-        if isinstance(data, np.ndarray):             # .npy: the array itself
-            T = data
-        else:                                        # .npz: the array named "transforms"
-            with data:
-                if "transforms" not in data.files:
-                    raise SceneError(f'{path}: no array named "transforms" (has {", ".join(data.files)})',
+        if zipfile.is_zipfile(path):
+            with zipfile.ZipFile(path) as z:
+                names = [n.removesuffix(".npy") for n in z.namelist()]
+                if "transforms" not in names:
+                    raise SceneError(f'{path}: no array named "transforms" (has {", ".join(names) or "none"})',
                                      loc)
-                T = data["transforms"]
+                info = z.getinfo(z.namelist()[names.index("transforms")])
+                with z.open(info) as f:
+                    T = _checked_npy(f, info.file_size, path, loc)
+        else:
+            with open(path, "rb") as f:
+                T = _checked_npy(f, path.stat().st_size, path, loc)
         T = np.asarray(T, dtype=np.float64)
-    except (OSError, ValueError) as e:
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as e:
         raise SceneError(f"{path}: cannot read instance transforms ({e})", loc) from e
-    if T.ndim != 3 or T.shape[1:] != (4, 4):
-        raise SceneError(f"{path}: instance transforms must have shape (N, 4, 4), not {T.shape}", loc)
     if not np.all(np.isfinite(T)):
         raise SceneError(f"{path}: instance transforms contain NaN or infinite values", loc)
     return T
+
+
+def _checked_npy(f: BinaryIO, size: int, path: Path, loc: Location) -> np.ndarray:
+    """Read one ``.npy`` stream of ``size`` bytes whose header must promise an (N, 4, 4) array of
+    numbers that fits in those bytes."""
+    version = np.lib.format.read_magic(f)
+    read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+    shape, fortran_order, dtype = read_header(f)
+    if len(shape) != 3 or shape[1:] != (4, 4):
+        raise SceneError(f"{path}: instance transforms must have shape (N, 4, 4), not {shape}", loc)
+    if dtype.kind not in "fiu":
+        raise SceneError(f"{path}: instance transforms must be numbers, not {dtype}", loc)
+    if shape[0] > MAX_INSTANCES:
+        raise SceneError(f"{path}: {shape[0]} instances exceed the limit of {MAX_INSTANCES}", loc)
+    needed = shape[0] * 16 * dtype.itemsize
+    if needed > size - f.tell():
+        raise SceneError(f"{path}: the header promises {shape[0]} matrices ({needed} bytes) but the file "
+                         f"holds {max(size - f.tell(), 0)} bytes of data (truncated?)", loc)
+    data = np.frombuffer(f.read(needed), dtype=dtype)
+    if data.size != shape[0] * 16:
+        raise SceneError(f"{path}: instance transforms are truncated", loc)
+    return data.reshape(shape, order="F" if fortran_order else "C")
