@@ -3,7 +3,9 @@ or a stop request ends it. Its state (the film's sum and count plus what made it
 and restored, and a restored render continues bit for bit as if it had never stopped: a pass's
 random numbers depend only on (seed, sample index, pixel), and every pass adds exactly one
 sample per pixel, so the film's float64 sums are formed in the same order however a render is
-split into runs."""
+split into runs. On the CPU a pass is launched in chunks of a few rows that worker threads take on
+demand (some rows cost far more than others), and each row still gets its one sample per pass
+from exactly one launch, so how rows are shared out never changes the film."""
 from __future__ import annotations
 
 import os
@@ -11,6 +13,7 @@ import resource
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass, field
+from itertools import count
 from typing import Callable
 
 import numpy as np
@@ -51,13 +54,26 @@ class RenderStats:
 
 
 def default_threads(device: str) -> int:
-    """Warp runs a CPU launch on one thread; launching row bands from several threads uses every core."""
+    """Warp runs a CPU launch on one thread; launching row chunks from several threads uses every core."""
     return (os.cpu_count() or 1) if device == "cpu" else 1
 
 
 def peak_memory_mb() -> float:
     """Peak resident memory of this process (Linux reports ru_maxrss in KiB)."""
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+#: Chunks per thread and pass: enough that a thread finishing its cheap rows takes more, few
+#: enough that the per-launch overhead stays small.
+CHUNKS_PER_THREAD = 16
+
+
+def row_chunks(height: int, threads: int) -> list[tuple[int, int]]:
+    """(first row, row count) of the chunks one pass is launched in; one chunk without threads."""
+    if threads <= 1:
+        return [(0, height)]
+    size = max(1, -(-height // (threads * CHUNKS_PER_THREAD)))
+    return [(r, min(size, height - r)) for r in range(0, height, size)]
 
 
 class RenderSession:
@@ -85,8 +101,8 @@ class RenderSession:
         wp.load_module(self.kernel.module, device=device)
         self.stats = RenderStats(width=W, height=H, compile_seconds=time.perf_counter() - t0,
                                  warnings=list(dict.fromkeys(scene.warnings)))   # each once
-        n_threads = max(1, min(threads or default_threads(device), H))
-        self.bands = [b for b in np.array_split(np.arange(H), n_threads) if len(b)]
+        self.threads = max(1, min(threads or default_threads(device), H))
+        self.chunks = row_chunks(H, self.threads)
         self._fingerprint: str | None = None
 
     @property
@@ -101,15 +117,19 @@ class RenderSession:
         import warp as wp
 
         s = self.settings
+        taken = count()   # the next chunk; next() on it is atomic under the GIL
 
-        def launch(band: np.ndarray) -> None:
-            wp.launch(self.kernel, dim=len(band) * self.ds.width,
-                      inputs=[self.ds.struct, s.seed, sample, int(band[0]), s.max_depth, s.rr_depth,
-                              self.film.sum, self.film.bad, self.film.rays],
-                      device=self.device)
-            wp.synchronize_device(self.device)
+        def worker() -> None:
+            while (i := next(taken)) < len(self.chunks):
+                first, rows = self.chunks[i]
+                wp.launch(self.kernel, dim=rows * self.ds.width,
+                          inputs=[self.ds.struct, s.seed, sample, first, s.max_depth, s.rr_depth,
+                                  self.film.sum, self.film.bad, self.film.rays],
+                          device=self.device)
+                wp.synchronize_device(self.device)
 
-        list(pool.map(launch, self.bands))
+        for f in [pool.submit(worker) for _ in range(self.threads)]:
+            f.result()
 
     def run(self, spp: int, time_limit: float | None = None, on_pass: Callable[["RenderSession"], None] | None = None,
             should_stop: Callable[[], bool] | None = None) -> RenderStats:
@@ -120,7 +140,7 @@ class RenderSession:
             raise RenderError(f"spp must be at least 1, got {spp}")
         t0 = time.perf_counter()
         base_seconds = self.stats.seconds
-        with ThreadPoolExecutor(max_workers=len(self.bands)) as pool:
+        with ThreadPoolExecutor(max_workers=self.threads) as pool:
             try:
                 while self.film.spp < spp:
                     self._pass(pool, self.film.spp)
@@ -152,8 +172,9 @@ class RenderSession:
 
     def state(self) -> dict[str, np.ndarray]:
         """Everything needed to continue: the film and what it was made from."""
-        return {"sum": self.film.sum.numpy(), "spp": np.int64(self.film.spp), "bad": self.film.bad.numpy(),
-                "rays": self.film.rays.numpy(), "seconds": np.float64(self.stats.seconds),
+        return {"sum": self.film.sum.numpy(), "spp": np.int64(self.film.spp),
+                "bad": np.array([self.film.bad_samples], dtype=np.int32),
+                "rays": np.array([self.film.ray_count]), "seconds": np.float64(self.stats.seconds),
                 "fingerprint": np.str_(self.fingerprint),
                 "settings": np.str_(repr(sorted(asdict(self.settings).items())))}
 
@@ -168,8 +189,7 @@ class RenderSession:
             raise RenderError(f"{source} was made with other settings {state['settings']}, not {mine}; "
                               "refusing to resume")
         self.film.sum.assign(wp.array(state["sum"], dtype=wp.vec3d, device=self.device))
-        self.film.bad.assign(wp.array(state["bad"], dtype=int, device=self.device))
-        self.film.rays.assign(wp.array(state["rays"], dtype=wp.float64, device=self.device))
+        self.film.set_counts(int(np.sum(state["bad"])), float(np.sum(state["rays"])))
         self.film.spp = int(state["spp"])
         self.stats.seconds = float(state["seconds"])
         self._update_stats(self.stats.seconds)

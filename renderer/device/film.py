@@ -1,5 +1,8 @@
 """The film: a running sum of radiance per pixel (float64) and the number of samples in it.
-Passes add into it; the image is the sum divided by the count."""
+Passes add into it; the image is the sum divided by the count. The ray and dropped-sample counts
+are kept per image row: a CPU ``atomic_add`` is a plain read-modify-write, so threads launching
+different rows must never add into one counter; each row is written by one launch per pass and
+the totals are summed on the host."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -20,8 +23,8 @@ class Film:
 
     def __post_init__(self) -> None:
         self.sum = wp.zeros(self.width * self.height, dtype=wp.vec3d, device=self.device)
-        self.bad = wp.zeros(1, dtype=int, device=self.device)
-        self.rays = wp.zeros(1, dtype=wp.float64, device=self.device)
+        self.bad = wp.zeros(self.height, dtype=int, device=self.device)
+        self.rays = wp.zeros(self.height, dtype=wp.float64, device=self.device)
 
     def image(self) -> np.ndarray:
         """Linear RGB, float32 (H, W, 3): the mean of all samples taken so far."""
@@ -31,9 +34,17 @@ class Film:
     @property
     def bad_samples(self) -> int:
         """Samples dropped because their radiance was NaN, infinite or negative."""
-        return int(self.bad.numpy()[0])
+        return int(self.bad.numpy().sum())
 
     @property
     def ray_count(self) -> float:
         """Rays traced so far (camera, continuation and shadow rays)."""
-        return float(self.rays.numpy()[0])
+        return float(self.rays.numpy().sum())   # whole numbers below 2**53: the sum is exact
+
+    def set_counts(self, bad_samples: int, rays: float) -> None:
+        """Restore the totals of a checkpoint (row 0 holds them; the other rows start at zero)."""
+        bad = np.zeros(self.height, dtype=np.int32)
+        ray = np.zeros(self.height, dtype=np.float64)
+        bad[0], ray[0] = bad_samples, rays
+        self.bad.assign(wp.array(bad, dtype=int, device=self.device))
+        self.rays.assign(wp.array(ray, dtype=wp.float64, device=self.device))

@@ -13,6 +13,7 @@ import numpy as np
 import warp as wp
 
 from renderer.camera import generate_ray
+from renderer.device.kernel_options import KERNEL_OPTIONS
 from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import intersect, surface_at
 from renderer.integrators.shading import load_bsdf, shading_functions
@@ -31,7 +32,7 @@ AOV_CHANNELS = {"albedo": ("R", "G", "B"), "normal": ("X", "Y", "Z"), "depth": (
 def aov_kernel(features: Features) -> wp.Kernel:
     shading_frame, _, sample_bsdf = shading_functions(features)
 
-    @wp.kernel(module="unique")
+    @wp.kernel(module="unique", module_options=KERNEL_OPTIONS)
     def first_hit(scene: Scene, seed: int, n_samples: int, albedo: wp.array(dtype=wp.vec3),
                   normal: wp.array(dtype=wp.vec3), depth: wp.array(dtype=float)):
         pixel = wp.tid()
@@ -52,7 +53,7 @@ def aov_kernel(features: Features) -> wp.Kernel:
                 shape = scene.geo.inst_shape[hit.inst]
                 s = surface_at(scene.geo, hit, scene.shape_flip[shape] != 0)
                 m = scene.shape_material[shape]
-                b = load_bsdf(scene, m, s.uv)
+                b = load_bsdf(scene.mat, scene.tex, scene.spectral, scene.spectral_n, m, s.uv)
                 b.wavelength_u = wp.randf(rng)
                 frame = shading_frame(scene, m, s)
                 wo_l = to_local(frame, -ray.d)

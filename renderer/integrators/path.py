@@ -12,6 +12,7 @@ from functools import lru_cache
 import warp as wp
 
 from renderer.camera import generate_ray
+from renderer.device.kernel_options import KERNEL_OPTIONS
 from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import intersect, occluded, surface_at
 from renderer.geometry.offsets import offset_origin, ray_epsilon
@@ -47,7 +48,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
     light_sampling = nee and len(features.lights) > 0
     has_sss = features.subsurface
 
-    @wp.kernel(module="unique")
+    @wp.kernel(module="unique", module_options=KERNEL_OPTIONS)
     def integrate(scene: Scene, seed: int, sample_index: int, row_offset: int, max_depth: int,
                   rr_depth: int,
                   film: wp.array(dtype=wp.vec3d), bad_samples: wp.array(dtype=int),
@@ -97,7 +98,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
             if depth >= max_depth:
                 break
             m = scene.shape_material[shape]
-            b = load_bsdf(scene, m, s.uv)
+            b = load_bsdf(scene.mat, scene.tex, scene.spectral, scene.spectral_n, m, s.uv)
             b.wavelength_u = wp.randf(rng)
             if wp.static(has_sss):
                 # subsurface scattering may move the vertex to where light leaves the object
@@ -162,7 +163,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
         if wp.isfinite(L) and L[0] >= 0.0 and L[1] >= 0.0 and L[2] >= 0.0:
             film[pixel] = film[pixel] + wp.vec3d(wp.float64(L[0]), wp.float64(L[1]), wp.float64(L[2]))
         else:
-            wp.atomic_add(bad_samples, 0, 1)
-        wp.atomic_add(ray_count, 0, wp.float64(n_rays))
+            wp.atomic_add(bad_samples, py, 1)   # per row: no two CPU threads ever add into one counter
+        wp.atomic_add(ray_count, py, wp.float64(n_rays))
 
     return integrate

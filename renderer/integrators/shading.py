@@ -13,32 +13,35 @@ import warp as wp
 
 from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import Surface
-from renderer.materials import dispatch_table
+from renderer.color.rgb_weights import RgbWeightTable
+from renderer.materials import Materials, dispatch_table
 from renderer.materials.bsdf import BSDF, MAX_SLOTS, BSDFEval, BSDFSample, Slots
 from renderer.sampling.frames import Frame, frame_from_tangent
-from renderer.textures import texture_eval
+from renderer.textures import Textures, texture_eval
 
 #: Finite-difference step in texture space for bump mapping (pbrt's fallback without ray differentials).
 BUMP_DELTA = 0.0005
 
 
 @wp.func
-def load_bsdf(scene: Scene, m: int, uv: wp.vec2) -> BSDF:
-    """Evaluate a material's parameter textures at uv into the rows of ``BSDF.p``."""
+def load_bsdf(mat: Materials, tex: Textures, spectral: RgbWeightTable, spectral_n: int, m: int,
+              uv: wp.vec2) -> BSDF:
+    """Evaluate a material's parameter textures at uv into the rows of ``BSDF.p``. Takes only the
+    tables it reads: a CPU call copies struct arguments, and the whole ``Scene`` is 2 kB."""
     p = Slots()
     for j in range(MAX_SLOTS):
-        tid = scene.mat.slots[m, j]
+        tid = mat.slots[m, j]
         if tid >= 0:
-            v = texture_eval(scene.tex, tid, uv)
+            v = texture_eval(tex, tid, uv)
             p[j, 0] = v[0]
             p[j, 1] = v[1]
             p[j, 2] = v[2]
     b = BSDF()
-    b.kind = scene.mat.kind[m]
+    b.kind = mat.kind[m]
     b.p = p
-    b.flags = scene.mat.flags[m]
-    b.spectral = scene.spectral
-    b.spectral_n = scene.spectral_n
+    b.flags = mat.flags[m]
+    b.spectral = spectral
+    b.spectral_n = spectral_n
     return b
 
 
