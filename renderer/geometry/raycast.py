@@ -12,6 +12,8 @@ from renderer.device.runtime import init_warp
 from renderer.geometry.instances import Geometry, build_geometry
 from renderer.geometry.intersect import intersect
 
+wp.set_module_options({"enable_backward": False})   # nothing differentiates these kernels
+
 
 @wp.kernel
 def _cast(geo: Geometry, origins: wp.array(dtype=wp.vec3), dirs: wp.array(dtype=wp.vec3), t_max: float,

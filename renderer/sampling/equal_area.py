@@ -8,6 +8,8 @@ import warp as wp
 from renderer.device.runtime import init_warp
 from renderer.vecmath import PI
 
+wp.set_module_options({"enable_backward": False})   # nothing differentiates these kernels
+
 
 @wp.func
 def equal_area_square_to_sphere(p: wp.vec2) -> wp.vec3:
