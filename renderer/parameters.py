@@ -80,8 +80,9 @@ class Parameter:
         if not np.all(np.isfinite(a)):
             raise SceneError(f'{owner}: parameter "{self.name}" must be finite, got {a.tolist()}', loc)
         if (self.lo is not None and np.any(a < self.lo)) or (self.hi is not None and np.any(a > self.hi)):
-            raise SceneError(f'{owner}: parameter "{self.name}" = {a.tolist()} is outside '
-                             f'[{self.lo}, {self.hi}]', loc)
+            lo = "-inf" if self.lo is None else self.lo
+            hi = "inf" if self.hi is None else self.hi
+            raise SceneError(f'{owner}: parameter "{self.name}" = {a.tolist()} is outside [{lo}, {hi}]', loc)
         if self.type == "int":
             if float(a.ravel()[0]) != math.floor(float(a.ravel()[0])):
                 raise SceneError(f'{owner}: parameter "{self.name}" must be an integer, got {value!r}', loc)

@@ -16,15 +16,15 @@ from renderer.device.kernel_options import KERNEL_OPTIONS
 from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import intersect, occluded, surface_at
 from renderer.geometry.offsets import offset_origin, ray_epsilon
+from renderer.integrators.shading import load_bsdf, shading_functions
+from renderer.integrators.subsurface import subsurface_scatter
 from renderer.lights import dispatch
 from renderer.lights.sample import LightEval, light_sampler
 from renderer.materials.bsdf import SPECULAR
 from renderer.sampling.frames import to_local, to_world
-from renderer.vecmath import max3
 from renderer.sampling.mis import power_heuristic
 from renderer.sampling.rng import sample_rng
-from renderer.integrators.shading import load_bsdf, shading_functions
-from renderer.integrators.subsurface import subsurface_scatter
+from renderer.vecmath import max3
 
 
 @wp.func
