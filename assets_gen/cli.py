@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 
 from assets_gen import recipe
 from assets_gen.core import GeneratorError
@@ -23,6 +24,9 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    # colour-science warns at import that matplotlib (plotting, unused here) is missing: the user
+    # of the command should see only its own messages
+    warnings.filterwarnings("ignore", message='"Matplotlib" related API features are not available')
     if not getattr(args, "run", None):
         parser.print_help()
         return 0 if args.command is None else 2

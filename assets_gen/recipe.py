@@ -95,9 +95,13 @@ def load(path: str | Path, quick: bool = False) -> list[Entry]:
     if not path.is_file():
         raise RecipeError(f"recipe {path} not found")
     try:
-        doc = json.loads(path.read_text())
+        doc = json.loads(path.read_bytes().decode("utf-8"))
+    except UnicodeDecodeError as e:
+        raise RecipeError(f"{path}: not UTF-8 text (byte {e.start})") from None
     except json.JSONDecodeError as e:
         raise RecipeError(f"{path}:{e.lineno}: not valid JSON: {e.msg}") from None
+    except (ValueError, RecursionError) as e:   # a number over Python's digit limit; nesting too deep
+        raise RecipeError(f"{path}: not a usable JSON document: {e}") from None
     if not isinstance(doc, dict) or not isinstance(doc.get("assets"), list):
         raise RecipeError(f'{path}: expected an object with an "assets" list')
     if doc.get("recipe", RECIPE_FORMAT) != RECIPE_FORMAT:

@@ -153,7 +153,8 @@ class SkyParams(Params):
                 f"sun elevation must be 0.5..90 deg (Preetham has no night), got {self.elevation_deg}")
         require(2.0 <= self.turbidity <= 10.0,
                 f"turbidity must be 2..10 (the model's fitted range), got {self.turbidity}")
-        require(8 <= self.resolution <= 8192, f"resolution must be 8..8192, got {self.resolution}")
+        require(8 <= self.resolution <= 4096,
+                f"resolution must be 8..4096 (memory grows with the pixel count: 1.6 GB at 2048), got {self.resolution}")
         require(self.layout in ("both", "latlong", "equal-area"),
                 f"layout must be both, latlong or equal-area, got {self.layout!r}")
         require(0.0 <= self.ground_albedo <= 1.0, f"ground albedo must be 0..1, got {self.ground_albedo}")

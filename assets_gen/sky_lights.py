@@ -15,7 +15,7 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from assets_gen.core import Generator, Job, Params, param, require
+from assets_gen.core import Generator, Job, Params, param, reading, require
 
 
 @dataclass(frozen=True)
@@ -47,16 +47,20 @@ def _fmt(v: float) -> str:
 
 def write(job: Job) -> list[str]:
     p = job.params
-    meta = json.loads((Path(p.sky) / "sky.json").read_text())
-    sun = meta["params"]["sun"]
+    with reading(Path(p.sky) / "sky.json", "sky description"):
+        meta = json.loads((Path(p.sky) / "sky.json").read_text())["params"]
+        sun = meta["sun"]
+        d = [float(c) for c in sun["direction_world_y_up"]]
+        when = [float(meta[k]) for k in ("elevation_deg", "azimuth_deg", "turbidity")]
+        radius = _fmt(float(sun.get("angular_radius_deg", 0.27)))
+        strength = ([float(v) * p.scale for v in sun["rgb_irradiance"]] if p.sun == "rgb"
+                    else float(sun["normal_illuminance_lux"]) / 1000.0)   # klx
     env = Path(p.sky) / _map_name(p.layout)
     env_rel = os.path.relpath(env.resolve(), job.out_dir.resolve()).replace(os.sep, "/")
-    d = sun["direction_world_y_up"]
     lines = [
         f"# Written by `assets-gen recipe` (sky-lights) from {(Path(job.given.sky) / 'sky.json').as_posix()}: "
         "do not edit.",
-        f"# Sun elevation {_fmt(meta['params']['elevation_deg'])} deg, azimuth "
-        f"{_fmt(meta['params']['azimuth_deg'])} deg, turbidity {_fmt(meta['params']['turbidity'])};",
+        f"# Sun elevation {_fmt(when[0])} deg, azimuth {_fmt(when[1])} deg, turbidity {_fmt(when[2])};",
         f"# sky and sun share the exposure scale {_fmt(p.scale)} (the map is in kcd/m^2).",
         "AttributeBegin",
         "  Rotate -90 1 0 0   # the sky's light frame is +z up; this scene is +y up",
@@ -65,14 +69,11 @@ def write(job: Job) -> list[str]:
     ]
     sun_line = (f'LightSource "distant" "point3 from" [{_fmt(d[0])} {_fmt(d[1])} {_fmt(d[2])}] '
                 f'"point3 to" [0 0 0]')
-    radius = _fmt(sun.get("angular_radius_deg", 0.27))
     if p.sun == "rgb":
-        irr = [v * p.scale for v in sun["rgb_irradiance"]]
-        lines.append(f'{sun_line}\n    "rgb L" [{" ".join(_fmt(v) for v in irr)}] '
+        lines.append(f'{sun_line}\n    "rgb L" [{" ".join(_fmt(v) for v in strength)}] '
                      f'"float angularradius" [{radius}]')
     else:   # a blackbody L is normalised to luminance 1: scale carries the illuminance (klx)
-        klx = float(sun["normal_illuminance_lux"]) / 1000.0
-        lines.append(f'{sun_line}\n    "blackbody L" [{_fmt(p.temperature)}] "float scale" [{_fmt(klx * p.scale)}] '
+        lines.append(f'{sun_line}\n    "blackbody L" [{_fmt(p.temperature)}] "float scale" [{_fmt(strength * p.scale)}] '
                      f'"float angularradius" [{radius}]')
     (job.stage / "lights.pbrt").write_text("\n".join(lines) + "\n")
     return ["lights.pbrt"]

@@ -2,6 +2,6 @@
 from it) and the helpers that keep outputs reproducible (staging, manifests, PLY/map writers,
 meshing, the camera)."""
 from assets_gen.core.generator import Generator, Job
-from assets_gen.core.params import GeneratorError, Params, param, require
+from assets_gen.core.params import GeneratorError, Params, param, reading, require
 
-__all__ = ["Generator", "GeneratorError", "Job", "Params", "param", "require"]
+__all__ = ["Generator", "GeneratorError", "Job", "Params", "param", "reading", "require"]

@@ -13,6 +13,7 @@ from typing import Any, Iterator
 import numpy as np
 
 from assets_gen import __version__
+from assets_gen.core.params import GeneratorError
 
 
 @contextlib.contextmanager
@@ -20,8 +21,11 @@ def staged_output(out_dir: str | Path) -> Iterator[Path]:
     """Yield an empty staging folder; its files move into ``out_dir`` only if the body succeeds,
     so a failed or interrupted generator leaves nothing half-written behind."""
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=".staging-", dir=out_dir))
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        stage = Path(tempfile.mkdtemp(prefix=".staging-", dir=out_dir))
+    except OSError as e:
+        raise GeneratorError(f"cannot write into output folder {str(out_dir)!r}: {e.strerror or e}") from e
     try:
         yield stage
         for f in sorted(stage.iterdir()):

@@ -2,16 +2,30 @@
 each field carries its default, its help (with the unit) and whether it names an input file."""
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping, TypeVar
+from typing import Any, Iterator, Mapping, TypeVar
 
 P = TypeVar("P", bound="Params")
 
 
 class GeneratorError(ValueError):
     """A bad generator parameter; the CLI prints it on one line and exits with code 2."""
+
+
+@contextlib.contextmanager
+def reading(path: str | Path, what: str) -> Iterator[None]:
+    """Turn a failure to read or parse an input file into a :class:`GeneratorError` naming it:
+    readers (OpenEXR, trimesh, Pillow, json) raise their own exception types for a bad file."""
+    try:
+        yield
+    except GeneratorError:
+        raise
+    except Exception as e:  # the block holds only the read, so nothing else is masked
+        raise GeneratorError(f"cannot read {what} {str(path)!r}: {e}") from e
 
 
 def require(cond: bool, message: str) -> None:
@@ -84,6 +98,8 @@ def _coerce(f: dataclasses.Field, value: Any) -> Any:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise bad
         value = float(value)
+        if not math.isfinite(value):
+            raise GeneratorError(f"parameter {f.name!r}: expected a finite number, got {value!r}")
     elif want is str:
         if not isinstance(value, str):
             raise bad
@@ -94,6 +110,8 @@ def _coerce(f: dataclasses.Field, value: Any) -> Any:
                 or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value)):
             raise bad
         value = tuple(float(v) for v in value)
+        if not all(math.isfinite(v) for v in value):
+            raise GeneratorError(f"parameter {f.name!r}: expected finite numbers, got {list(value)}")
     return value
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 from scipy import ndimage
 
-from assets_gen.core import Generator, Job, Params, param, require
+from assets_gen.core import Generator, Job, Params, param, reading, require
 from assets_gen.core.noise import smooth_noise
 from assets_gen.core.output import write_map
 
@@ -64,7 +64,7 @@ def lens_thickness(p: LensThicknessParams, seed: int) -> tuple[np.ndarray, np.nd
         from PIL import Image
         from skimage.transform import resize
 
-        with Image.open(p.mask) as im:
+        with reading(p.mask, "lens mask"), Image.open(p.mask) as im:
             raw = np.asarray(im.convert("L"), dtype=np.float64) / 255.0
         scale = p.resolution / max(raw.shape)
         shape = (max(1, round(raw.shape[0] * scale)), max(1, round(raw.shape[1] * scale)))

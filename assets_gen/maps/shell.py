@@ -49,7 +49,8 @@ class ShellHeightParams(ShellMapParams):
 
     def validate(self) -> None:
         super().validate()
-        require(self.bands >= 1, "need at least one growth band")
+        require(1 <= self.bands <= self.width // 2,
+                f"growth bands must be 1..{self.width // 2} (two texels each across the map width)")
         require(self.band_height_mm >= 0, "band height must be non-negative (mm)")
         require(0 <= self.irregularity <= 2, "irregularity must be between 0 and 2")
 
@@ -64,7 +65,9 @@ class ShellBumpParams(ShellMapParams):
 
     def validate(self) -> None:
         super().validate()
-        require(self.ridges >= 1, "need at least one ridge")
+        across = self.height if self.pattern == "radial" else self.width
+        require(1 <= self.ridges <= across // 2,
+                f"ridges must be 1..{across // 2} (two texels each across the map)")
         require(self.ridge_height_mm >= 0, "ridge height must be non-negative (mm)")
         require(self.sharpness >= 1, "sharpness must be at least 1")
 

@@ -47,7 +47,11 @@ class DuneParams(Params):
         require(self.stoss_angle_deg < self.repose_angle_deg <= self.max_slope_deg,
                 "need stoss angle < angle of repose <= max slope")
         require(self.crest_wander >= 0 and self.wander_size > 0, "crest wander >= 0 and wander size > 0 (m)")
-        require(self.smoothing_steps >= 0, "smoothing steps must be non-negative")
+        require(0 <= self.smoothing_steps <= 100, "smoothing steps must be 0..100 (crests are gone long before)")
+        tallest = self.dune_wavelength * math.tan(math.radians(self.stoss_angle_deg))
+        require(self.dune_height <= tallest,
+                f"dune height must be at most wavelength x tan(stoss angle) = {tallest:.3g} m: taller crests "
+                "leave no interdune flats (the stoss slope cannot fall that far in one wavelength)")
 
 
 def dune_profile(x: np.ndarray, z: np.ndarray, p: DuneParams, rng: np.random.Generator) -> np.ndarray:

@@ -16,9 +16,10 @@ from typing import Any
 
 import numpy as np
 
-from assets_gen.core import Generator, GeneratorError, Job, Params, param, require
+from assets_gen.core import Generator, GeneratorError, Job, Params, param, reading, require
 from assets_gen.core.camera import PinholeCamera
 from assets_gen.core.output import write_ply
+from renderer.scene.transform import MAX_INSTANCES as MAX_GRAINS
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,7 @@ class GrainParams(Params):
     def validate(self) -> None:
         require(Path(self.surface).is_file(), f"surface mesh {self.surface!r} not found")
         require(not self.scene or Path(self.scene).is_file(), f"scene file {self.scene!r} not found")
-        require(self.count >= 1, "grain count must be at least 1")
+        require(1 <= self.count <= MAX_GRAINS, f"grain count must be 1..{MAX_GRAINS} (the renderer's instance limit)")
         require(self.median_diameter_mm > 0, "median grain diameter must be positive (mm)")
         require(0 <= self.sigma_ln <= 1.5, "sigma_ln must be between 0 and 1.5")
         require(0 < self.min_pixel_fraction, "min pixel fraction must be positive")
@@ -264,8 +265,9 @@ def generate(p: GrainParams, seed: int) -> tuple[Grains, list[tuple[np.ndarray, 
 
     p.validate()
     rng = np.random.default_rng(seed)
-    mesh = trimesh.load(p.surface, process=False, force="mesh")
-    vertices, faces = np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
+    with reading(p.surface, "surface mesh"):
+        mesh = trimesh.load(p.surface, process=False, force="mesh")
+        vertices, faces = np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
     require(len(faces) > 0, f"surface mesh {p.surface!r} has no triangles")
     cam = scene_camera(p, vertices, faces)
     shapes = [grain_shape(rng, p.subdivisions, p.shape_jitter, p.elongation) for _ in range(2)]

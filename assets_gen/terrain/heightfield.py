@@ -10,7 +10,7 @@ import numpy as np
 
 from assets_gen.core.meshing import grid_faces
 from assets_gen.core.output import write_ply, write_preview
-from assets_gen.core.params import GeneratorError, require
+from assets_gen.core.params import GeneratorError, reading, require
 
 
 @dataclass(frozen=True)
@@ -118,7 +118,8 @@ def read_heightfield(path: str | Path) -> Heightfield:
     from renderer.io.images import read_exr
 
     require(Path(path).is_file(), f"heightfield {str(path)!r} not found")
-    chans, header = read_exr(path)
+    with reading(path, "heightfield"):
+        chans, header = read_exr(path)
     require("Y" in chans and all(k in header for k in ("x0", "x1", "z0", "z1")),
             f"{path} is not a dunes heightfield (needs channel Y and x0/x1/z0/z1 in its header)")
     y = chans["Y"].astype(np.float64)

@@ -8,7 +8,9 @@ import numpy as np
 
 @lru_cache(maxsize=64)
 def blackbody_rgb(temperature_k: float) -> np.ndarray:
-    """Linear sRGB of a blackbody emitter, normalised to luminance Y = 1 as pbrt-v4 normalises lights."""
+    """Linear sRGB of a blackbody emitter, normalised to luminance Y = 1 as pbrt-v4 normalises lights.
+    Below about 1900 K the colour lies outside the sRGB gamut (blue < 0); that component is clipped
+    to 0, since an RGB renderer cannot emit negative light."""
     import colour
 
     if not temperature_k > 0:
@@ -20,7 +22,7 @@ def blackbody_rgb(temperature_k: float) -> np.ndarray:
     xyz = xyz / xyz[1]
     rgb = colour.XYZ_to_RGB(xyz, colour.RGB_COLOURSPACES["sRGB"], illuminant=None,
                             chromatic_adaptation_transform=None)
-    return np.asarray(rgb, dtype=np.float64)
+    return np.maximum(np.asarray(rgb, dtype=np.float64), 0.0)
 
 
 def linear_to_srgb(x: np.ndarray) -> np.ndarray:

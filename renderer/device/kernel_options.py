@@ -4,11 +4,13 @@ a source module's ``set_module_options``).
 Host code is compiled with ``-menable-no-nans``: Warp's ``min``/``max`` otherwise become NaN-safe
 compare chains in the hot traversal and shading code. The NaN guards keep working because
 ``wp.isfinite`` and the NaN tests the kernels rely on are checked by tests (a NaN sample is still
-dropped and counted). CUDA code is unaffected: the flag only reaches the CPU compiler."""
+dropped and counted). CUDA code is unaffected: the flag only reaches the CPU compiler. Clang then
+warns about every NaN constant in Warp's own headers (``-Wnan-infinity-disabled``); those are
+Warp's identities and out-of-range returns, not our code, so that one warning is turned off."""
 from __future__ import annotations
 
 from typing import Any
 
 #: ``module_options`` for the render kernels: no backward pass (nothing differentiates them; it
 #: doubled the generated code) and the host compiler flags above on top of Warp's default.
-KERNEL_OPTIONS: dict[str, Any] = {"enable_backward": False, "cpu_compiler_flags": "-march=native -menable-no-nans"}
+KERNEL_OPTIONS: dict[str, Any] = {"enable_backward": False, "cpu_compiler_flags": "-march=native -menable-no-nans -Wno-nan-infinity-disabled"}

@@ -3,20 +3,46 @@ that a requested device exists."""
 from __future__ import annotations
 
 import os
+import sys
+import tempfile
 
 from renderer.errors import RenderError
 
+#: What Warp's native code prints on every machine without an NVIDIA driver: expected there, and
+#: not the user's concern (asking for ``--device cuda`` is refused with our own message instead).
+_NO_DRIVER = "Could not find or load the NVIDIA CUDA driver"
+
 
 def init_warp(quiet: bool = True) -> None:
-    """Initialise Warp once, with kernels cached under $WARP_CACHE_PATH when it is set."""
+    """Initialise Warp (again: a no-op), with kernels cached under $WARP_CACHE_PATH when it is set."""
     import warp as wp
 
-    cache = os.environ.get("WARP_CACHE_PATH")
-    if cache:
-        wp.config.kernel_cache_dir = cache
     # Warp's log level (1.19 dropped config.quiet): the banner and per-module load times are INFO
     wp.config.log_level = wp.LOG_WARNING if quiet else wp.LOG_INFO
-    wp.init()
+    # Warp itself reads $WARP_CACHE_PATH and keeps one subfolder per Warp version; setting
+    # config.kernel_cache_dir to it here would, on a second call, point later compiles at the
+    # unversioned folder (where the next process never looks, and Warp warns about them)
+    if quiet:
+        _init_without_driver_notice(wp)
+    else:
+        wp.init()
+
+
+def _init_without_driver_notice(wp) -> None:
+    """``wp.init()`` with the native library's stderr captured, passing on all but the no-driver line."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as captured:
+        os.dup2(captured.fileno(), 2)
+        try:
+            wp.init()
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            captured.seek(0)
+            for line in captured.read().decode(errors="replace").splitlines(keepends=True):
+                if _NO_DRIVER not in line:
+                    sys.stderr.write(line)
 
 
 def require_device(device: str) -> None:

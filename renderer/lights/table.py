@@ -35,9 +35,9 @@ class Lights:
 
 def colour_parameters(name: str, doc: str) -> tuple[Parameter, Parameter]:
     """The two parameters every pbrt-v4 light has: its colour ``name`` (rgb, or a blackbody of
-    luminance 1 as in pbrt-v4) and the ``scale`` that multiplies it. The colour has no lower
-    bound: a blackbody below about 1900 K lies outside the sRGB gamut (a negative component)."""
-    return (Parameter(name, "rgb", (1.0, 1.0, 1.0), doc=doc),
+    luminance 1 as in pbrt-v4) and the ``scale`` that multiplies it, neither negative: negative
+    light would subtract from the image (and break light sampling's densities)."""
+    return (Parameter(name, "rgb", (1.0, 1.0, 1.0), lo=0.0, doc=doc),
             Parameter("scale", "float", 1.0, lo=0.0, doc=f"multiplies {name}"))
 
 

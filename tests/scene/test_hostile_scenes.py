@@ -173,3 +173,21 @@ def test_ascii_ply_counts_are_checked_and_a_valid_one_loads(tmp_path):
     assert len(load_description(_write(tmp_path, HEAD + 'Shape "plymesh" "string filename" "g.ply"\n')).shapes) == 1
     (tmp_path / "b.ply").write_text(good.replace("element face 1", "element face 1000"))
     refused(tmp_path, HEAD + 'Shape "plymesh" "string filename" "b.ply"\n', 3, "declares 3, 1000 elements")
+
+
+@pytest.mark.parametrize("light, line", [
+    ('LightSource "distant" "rgb L" [-1 -1 -1]', 3),
+    ('LightSource "infinite" "rgb L" [1 -0.5 1]', 3),
+    ('LightSource "point" "rgb I" [1 1 1] "float scale" [-2]', 3),
+    ('AttributeBegin\nAreaLightSource "diffuse" "rgb L" [-3 0 0]\nShape "sphere"\nAttributeEnd', 4),
+])
+def test_negative_light_is_refused_where_written(tmp_path, light, line):
+    refused(tmp_path, HEAD + light + "\n" + SPHERE, line, r"outside \[0(\.0)?, inf\]")
+
+
+def test_a_blackbody_below_the_srgb_gamut_emits_no_negative_component():
+    from renderer.color.rgb import blackbody_rgb
+
+    warm = blackbody_rgb(1200.0)
+    assert warm.min() == 0.0 and warm[0] > warm[1] > 0.0     # deep red: blue clipped, not negative
+    assert np.all(blackbody_rgb(6500.0) > 0.5)
