@@ -16,7 +16,7 @@ SPP ?=
 RES ?=
 FLAGS ?=
 
-.PHONY: render test install bench clean props demo figures
+.PHONY: render test fuzz install bench clean props demo figures
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -50,6 +50,10 @@ figures:
 
 test: install
 	$(BIN)/python -m pytest -q
+
+# the hostile-input fuzzer at length (make test runs 60 seeded cases per kind); FUZZ_SEED picks another sequence
+fuzz: install
+	FUZZ_EXAMPLES=$(or $(FUZZ_EXAMPLES),5000) FUZZ_RENDER=1 $(BIN)/python -m pytest -q tests/fuzz
 
 bench: install
 	$(BIN)/pip install -e '.[bench]' >/dev/null

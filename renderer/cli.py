@@ -125,25 +125,37 @@ class _Progress:
 
 
 class _StopSignals:
-    """SIGINT/SIGTERM set a flag; the render stops after the pass in flight and writes its image."""
+    """SIGINT/SIGTERM handling for the whole command, installed before the scene is read.
+
+    While loading and compiling, a signal aborts at once (nothing to keep). While rendering, the
+    first sets ``signum`` and the render stops after the pass in flight; a second stops that pass
+    too (the session keeps the finished ones). While writing, and after a signal has decided the
+    exit, further signals are ignored, so the image and checkpoint are always written whole and the
+    exit code stays 128 + the first signal's number. Handlers are restored on exit unless a signal
+    arrived (the process is then on its way out)."""
 
     def __init__(self):
         self.signum: int | None = None
+        self.phase = "load"
 
     def __enter__(self) -> "_StopSignals":
         self.saved = {s: signal.signal(s, self._handle) for s in (signal.SIGINT, signal.SIGTERM)}
         return self
 
     def _handle(self, signum, frame) -> None:
-        if self.signum is not None:  # a second signal: stop now
+        first = self.signum is None
+        self.signum = self.signum or signum
+        if self.phase == "load" and first:
             raise KeyboardInterrupt
-        self.signum = signum
-        print(f"\nrender: {signal.Signals(signum).name}: finishing the current pass, then writing",
-              file=sys.stderr, flush=True)
+        if self.phase == "render":
+            if not first:
+                raise KeyboardInterrupt       # caught by the session after the pass in flight
+            print(f"\nrender: {signal.Signals(signum).name}: finishing the current pass, then writing",
+                  file=sys.stderr, flush=True)
 
     def __exit__(self, *exc) -> None:
         for s, h in self.saved.items():
-            signal.signal(s, h)
+            signal.signal(s, h if self.signum is None else signal.SIG_IGN)
 
 
 def _check_writable(path: Path, what: str) -> None:
@@ -183,115 +195,123 @@ def main(argv: list[str] | None = None) -> int:
     warnings.filterwarnings("ignore", message='"Matplotlib" related API features are not available')
     from renderer.errors import RenderError
 
+    with _StopSignals() as stop:
+        try:
+            return _run(args, stop)
+        except (RenderError, ValueError, OSError) as e:
+            if args.debug:
+                traceback.print_exc()
+            for line in str(e).splitlines() or [type(e).__name__]:   # SceneErrors: one located error per line
+                print(f"render: error: {line}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        except KeyboardInterrupt:
+            print("render: interrupted before any pass finished; nothing written", file=sys.stderr)
+            return 128 + (stop.signum or signal.SIGINT)
+
+
+def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
+    """The command after its arguments are parsed; errors and interrupts are main's."""
+    from renderer.api import load_scene, open_session, settings_for
+    from renderer.errors import RenderError
+    from renderer.io.checkpoint import save_checkpoint
+    from renderer.io.metrics import relative_mse
+    from renderer.scene.parser import shown_path
+    from renderer.session import RenderSession
+
+    for what, path in (("reference image", args.reference), ("checkpoint", args.resume)):
+        if path is not None and not path.is_file():
+            raise RenderError(f"{what} not found: {path}")
+    scene = load_scene(args.scene)
+    out = args.output or Path(scene.film.filename)
+    if out.suffix.lower() not in (".exr", ".png"):
+        source = "" if args.output else " (the scene's Film \"filename\"; choose another with -o)"
+        raise RenderError(f"output must end in .exr or .png, got {shown_path(out)}{source}")
+    if args.aov and out.suffix.lower() != ".exr":
+        raise RenderError(f"--aov layers need an .exr output, not {shown_path(out)}")
+    if args.error_log and not args.reference:
+        raise RenderError("--error-log needs --reference REF.exr")
+    w, h = args.res or (None, None)
+    settings = settings_for(scene, seed=args.seed, width=w, height=h, max_depth=args.max_depth, nee=not args.no_nee,
+                            rr_depth=args.rr_depth, thin_film=args.thin_film)
+    ref = None
+    if args.reference:
+        from renderer.io.images import read_image
+
+        ref = read_image(args.reference)[..., :3]
+        if ref.shape[:2] != (settings.height, settings.width):
+            raise RenderError(f"reference {args.reference} is {ref.shape[1]}x{ref.shape[0]}, "
+                              f"not {settings.width}x{settings.height}")
+    for what, path in (("output", out), ("checkpoint", args.checkpoint), ("error log", args.error_log)):
+        if path is not None:
+            _check_writable(path, what)
+    session = open_session(scene, settings, device=args.device, threads=args.threads, resume=args.resume)
+    for w in session.stats.warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    if args.resume:
+        print(f"render: resumed {args.resume} at {session.film.spp} spp", file=sys.stderr)
+    spp = scene.sampler.spp if args.spp is None else args.spp
+    prog = _Progress(not args.quiet, spp, session.film.spp)
+    clock = {"checkpoint": time.perf_counter(), "partial": time.perf_counter()}
+
+    def on_pass(s: RenderSession) -> None:
+        prog(s.film.spp)
+        now = time.perf_counter()
+        if args.checkpoint and now - clock["checkpoint"] >= args.checkpoint_every:
+            save_checkpoint(args.checkpoint, s.state())
+            clock["checkpoint"] = now
+        if args.write_partial_every and now - clock["partial"] >= args.write_partial_every:
+            write_outputs(out, s.image(), {}, args.exposure, header(s))
+            clock["partial"] = now
+        if args.error_log:
+            new = not args.error_log.exists()
+            with open(args.error_log, "a") as f:
+                if new:
+                    f.write("spp,seconds,relmse\n")
+                f.write(f"{s.film.spp},{s.stats.seconds:.4f},{relative_mse(s.image(), ref):.6g}\n")
+
+    def header(s: RenderSession) -> dict:
+        return {**s.stats.header(), "seed": settings.seed, "scene": str(args.scene), "sceneHash": s.fingerprint,
+                "renderer": "summertime"}
+
+    stop.phase = "render"
     try:
-        from renderer.api import load_scene, open_session, settings_for
-        from renderer.io.checkpoint import save_checkpoint
-        from renderer.io.metrics import relative_mse
-        from renderer.scene.parser import shown_path
-        from renderer.session import RenderSession
+        stats = session.run(spp, time_limit=args.time_limit, on_pass=on_pass,
+                            should_stop=lambda: stop.signum is not None)
+    finally:
+        stop.phase = "finish"
+        prog.close()
+    img = session.image()
+    layers: dict = {}
+    if args.aov or args.denoise:
+        from renderer.integrators.aov import render_aovs
 
-        for what, path in (("reference image", args.reference), ("checkpoint", args.resume)):
-            if path is not None and not path.is_file():
-                raise RenderError(f"{what} not found: {path}")
-        scene = load_scene(args.scene)
-        out = args.output or Path(scene.film.filename)
-        if out.suffix.lower() not in (".exr", ".png"):
-            source = "" if args.output else " (the scene's Film \"filename\"; choose another with -o)"
-            raise RenderError(f"output must end in .exr or .png, got {shown_path(out)}{source}")
-        if args.aov and out.suffix.lower() != ".exr":
-            raise RenderError(f"--aov layers need an .exr output, not {shown_path(out)}")
-        if args.error_log and not args.reference:
-            raise RenderError("--error-log needs --reference REF.exr")
-        w, h = args.res or (None, None)
-        settings = settings_for(scene, seed=args.seed, width=w, height=h, max_depth=args.max_depth, nee=not args.no_nee,
-                                rr_depth=args.rr_depth, thin_film=args.thin_film)
-        ref = None
-        if args.reference:
-            from renderer.io.images import read_image
+        aovs = render_aovs(session)
+        layers = {k: aovs[k] for k in args.aov}
+        if args.denoise:
+            from renderer.io.denoise import denoise
 
-            ref = read_image(args.reference)[..., :3]
-            if ref.shape[:2] != (settings.height, settings.width):
-                raise RenderError(f"reference {args.reference} is {ref.shape[1]}x{ref.shape[0]}, "
-                                  f"not {settings.width}x{settings.height}")
-        for what, path in (("output", out), ("checkpoint", args.checkpoint), ("error log", args.error_log)):
-            if path is not None:
-                _check_writable(path, what)
-        session = open_session(scene, settings, device=args.device, threads=args.threads, resume=args.resume)
-        for w in session.stats.warnings:
-            print(f"warning: {w}", file=sys.stderr)
-        if args.resume:
-            print(f"render: resumed {args.resume} at {session.film.spp} spp", file=sys.stderr)
-        spp = scene.sampler.spp if args.spp is None else args.spp
-        prog = _Progress(not args.quiet, spp, session.film.spp)
-        clock = {"checkpoint": time.perf_counter(), "partial": time.perf_counter()}
-
-        def on_pass(s: RenderSession) -> None:
-            prog(s.film.spp)
-            now = time.perf_counter()
-            if args.checkpoint and now - clock["checkpoint"] >= args.checkpoint_every:
-                save_checkpoint(args.checkpoint, s.state())
-                clock["checkpoint"] = now
-            if args.write_partial_every and now - clock["partial"] >= args.write_partial_every:
-                write_outputs(out, s.image(), {}, args.exposure, header(s))
-                clock["partial"] = now
-            if args.error_log:
-                new = not args.error_log.exists()
-                with open(args.error_log, "a") as f:
-                    if new:
-                        f.write("spp,seconds,relmse\n")
-                    f.write(f"{s.film.spp},{s.stats.seconds:.4f},{relative_mse(s.image(), ref):.6g}\n")
-
-        def header(s: RenderSession) -> dict:
-            return {**s.stats.header(), "seed": settings.seed, "scene": str(args.scene), "sceneHash": s.fingerprint,
-                    "renderer": "summertime"}
-
-        with _StopSignals() as stop:
-            try:
-                stats = session.run(spp, time_limit=args.time_limit, on_pass=on_pass,
-                                    should_stop=lambda: stop.signum is not None)
-            finally:
-                prog.close()
-            img = session.image()
-            layers: dict = {}
-            if args.aov or args.denoise:
-                from renderer.integrators.aov import render_aovs
-
-                aovs = render_aovs(session)
-                layers = {k: aovs[k] for k in args.aov}
-                if args.denoise:
-                    from renderer.io.denoise import denoise
-
-                    layers["noisy"] = img
-                    img = denoise(img, aovs["albedo"], aovs["normal"])
-            write_outputs(out, img, layers, args.exposure, header(session))
-            if args.checkpoint:
-                save_checkpoint(args.checkpoint, session.state())
-        print(f"wrote {out}: {stats.width}x{stats.height}, {stats.spp} spp in {stats.seconds:.2f} s "
-              f"(+{stats.compile_seconds:.2f} s kernel load), {stats.samples_per_second / 1e6:.3f} M samples/s, "
-              f"{stats.rays_per_second / 1e6:.3f} M rays/s, peak memory {stats.peak_memory_mb:.0f} MB",
-              file=sys.stderr)
-        if stats.spp < spp:
-            limited = "time limit" if args.time_limit is not None else "interrupt"
-            why = signal.Signals(stop.signum).name if stop.signum else limited
-            print(f"render: stopped by {why} at {stats.spp}/{spp} spp", file=sys.stderr)
-        if stop.signum is not None:
-            return 128 + stop.signum
-        if stats.interrupted:
-            return 128 + signal.SIGINT
-        if stats.bad_samples:
-            print(f"warning: dropped {stats.bad_samples} NaN/Inf/negative samples (not averaged into the image)",
-                  file=sys.stderr)
-            return EXIT_BAD_SAMPLES
-        return EXIT_OK
-    except (RenderError, ValueError, OSError) as e:
-        if args.debug:
-            traceback.print_exc()
-        for line in str(e).splitlines() or [type(e).__name__]:   # SceneErrors: one located error per line
-            print(f"render: error: {line}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
-        print("render: interrupted before any pass finished; nothing written", file=sys.stderr)
+            layers["noisy"] = img
+            img = denoise(img, aovs["albedo"], aovs["normal"])
+    write_outputs(out, img, layers, args.exposure, header(session))
+    if args.checkpoint:
+        save_checkpoint(args.checkpoint, session.state())
+    print(f"wrote {out}: {stats.width}x{stats.height}, {stats.spp} spp in {stats.seconds:.2f} s "
+          f"(+{stats.compile_seconds:.2f} s kernel load), {stats.samples_per_second / 1e6:.3f} M samples/s, "
+          f"{stats.rays_per_second / 1e6:.3f} M rays/s, peak memory {stats.peak_memory_mb:.0f} MB",
+          file=sys.stderr)
+    if stats.spp < spp:
+        limited = "time limit" if args.time_limit is not None else "interrupt"
+        why = signal.Signals(stop.signum).name if stop.signum else limited
+        print(f"render: stopped by {why} at {stats.spp}/{spp} spp", file=sys.stderr)
+    if stop.signum is not None:
+        return 128 + stop.signum
+    if stats.interrupted:
         return 128 + signal.SIGINT
+    if stats.bad_samples:
+        print(f"warning: dropped {stats.bad_samples} NaN/Inf/negative samples (not averaged into the image)",
+              file=sys.stderr)
+        return EXIT_BAD_SAMPLES
+    return EXIT_OK
 
 
 if __name__ == "__main__":

@@ -91,6 +91,46 @@ def test_sigint_leaves_valid_image_and_checkpoint(tmp_path):
     assert not list(tmp_path.glob(".*"))  # no temporary files left behind
 
 
+def _rendering(tmp_path: Path) -> tuple[subprocess.Popen, Path]:
+    """A long render whose passes have started (its progress line has been printed)."""
+    out = tmp_path / "out.exr"
+    proc = subprocess.Popen([sys.executable, "-m", "renderer", str(write_scene(tmp_path)), "-o", str(out),
+                             "--spp", "100000000"], stderr=subprocess.PIPE, text=True,
+                            env=dict(os.environ, PYTHONUNBUFFERED="1"), cwd=ROOT)
+    for line in proc.stderr:
+        if "spp," in line:
+            break
+    return proc, out
+
+
+def test_a_second_signal_soon_after_the_first_still_exits_by_the_first_with_the_image(tmp_path):
+    proc, out = _rendering(tmp_path)
+    proc.send_signal(signal.SIGINT)
+    time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    rest = proc.stderr.read()
+    assert proc.wait(timeout=120) == 128 + signal.SIGINT, rest
+    assert "stopped by SIGINT" in rest and np.all(np.isfinite(read_exr(out)[0]["R"]))
+
+
+def test_sigterm_while_loading_exits_143_and_writes_nothing(tmp_path):
+    """The handler is installed before the scene is read: a signal during load and kernel compile
+    ends the command with its own message and code, not by the signal's default action."""
+    out = tmp_path / "out.exr"
+    proc = subprocess.Popen([sys.executable, "-m", "renderer", str(write_scene(tmp_path)), "-o", str(out),
+                             "--spp", "100000000"], stderr=subprocess.PIPE, text=True, cwd=ROOT,
+                            env=dict(os.environ, PYTHONUNBUFFERED="1",
+                                     WARP_CACHE_PATH=str(tmp_path / "cold-cache")))   # a cold compile: seconds
+    time.sleep(2.0)
+    proc.send_signal(signal.SIGTERM)
+    time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    rest = proc.stderr.read()
+    assert proc.wait(timeout=300) == 128 + signal.SIGTERM, rest
+    assert "interrupted before any pass finished; nothing written" in rest
+    assert not out.exists()
+
+
 def test_aov_layers_are_sane(tmp_path):
     out = tmp_path / "out.exr"
     assert main([str(write_scene(tmp_path)), "-o", str(out), "--spp", "2", "--aov", "albedo,normal,depth",
