@@ -11,6 +11,9 @@ from assets_gen.core import Generator, Job, Params, param, require
 from assets_gen.core.noise import smooth_noise
 from assets_gen.core.output import write_map
 
+#: The largest map side, and so the most bands or ridges a map can show.
+MAX_MAP = 16384
+
 
 def banded_phase(t: np.ndarray, count: int, irregularity: float,
                  rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
@@ -36,7 +39,7 @@ class ShellMapParams(Params):
     waviness_size: float = param(0.1, "feature size of the wander, as a fraction of the map")
 
     def validate(self) -> None:
-        require(8 <= self.width <= 16384 and 8 <= self.height <= 16384, "map size must be 8..16384 pixels")
+        require(8 <= self.width <= MAX_MAP and 8 <= self.height <= MAX_MAP, f"map size must be 8..{MAX_MAP} pixels")
         require(0 <= self.waviness <= 0.2, "waviness must be between 0 and 0.2")
         require(self.waviness_size > 0, "waviness size must be positive")
 
@@ -49,8 +52,7 @@ class ShellHeightParams(ShellMapParams):
 
     def validate(self) -> None:
         super().validate()
-        require(1 <= self.bands <= self.width // 2,
-                f"growth bands must be 1..{self.width // 2} (two texels each across the map width)")
+        require(1 <= self.bands <= MAX_MAP, f"growth bands must be 1..{MAX_MAP} (one per texel of the largest map)")
         require(self.band_height_mm >= 0, "band height must be non-negative (mm)")
         require(0 <= self.irregularity <= 2, "irregularity must be between 0 and 2")
 
@@ -65,9 +67,7 @@ class ShellBumpParams(ShellMapParams):
 
     def validate(self) -> None:
         super().validate()
-        across = self.height if self.pattern == "radial" else self.width
-        require(1 <= self.ridges <= across // 2,
-                f"ridges must be 1..{across // 2} (two texels each across the map)")
+        require(1 <= self.ridges <= MAX_MAP, f"ridges must be 1..{MAX_MAP} (one per texel of the largest map)")
         require(self.ridge_height_mm >= 0, "ridge height must be non-negative (mm)")
         require(self.sharpness >= 1, "sharpness must be at least 1")
 

@@ -84,8 +84,9 @@ def _decoded(path: Path, srgb: bool | None) -> np.ndarray:
     if a.ndim == 2:
         a = a[..., None]
     if a.dtype == np.uint8:
-        x = a.astype(np.float32) / 255.0
-        return srgb_to_linear(x) if srgb is not False else x
+        codes = np.arange(256, dtype=np.float32) / 255.0
+        lut = srgb_to_linear(codes) if srgb is not False else codes
+        return lut[a]       # per code, not per pixel: colour's float64 decode peaked at 16x the float32 image
     if a.dtype == np.uint16:
         return a.astype(np.float32) / 65535.0
     return a.astype(np.float32)

@@ -65,13 +65,12 @@ def _mapping(image: np.ndarray, loc: Location | None) -> int:
     raise SceneError(f"environment image must be square (equal-area) or 2:1 (lat-long), got {w}x{h}", loc)
 
 
-def distribution_function(rgb: np.ndarray, mapping: int) -> np.ndarray:
-    """The function the map is importance sampled by: max channel, times sin θ for lat-long."""
-    f = rgb.max(axis=2).astype(np.float64)
-    if mapping == MAP_LATLONG:
-        h = rgb.shape[0]
-        f = f * np.sin(np.pi * (np.arange(h) + 0.5) / h)[:, None]
-    return f
+def distribution_function(rgb: np.ndarray, mapping: int) -> tuple[np.ndarray, np.ndarray | None]:
+    """The function the map is importance sampled by, as (max channel, per-row weight): sin θ for
+    lat-long (the solid angle of a row), none for the equal-area square."""
+    h = rgb.shape[0]
+    weight = np.sin(np.pi * (np.arange(h) + 0.5) / h) if mapping == MAP_LATLONG else None
+    return rgb.max(axis=2), weight
 
 
 def entry(light: LightDesc, tris: np.ndarray | None) -> LightEntry:
@@ -92,7 +91,7 @@ def entry(light: LightDesc, tris: np.ndarray | None) -> LightEntry:
         raise SceneError("environment image contains negative, NaN or infinite values", light.loc)
     rgb = np.ascontiguousarray(rgb, dtype=np.float32)
     h, w = rgb.shape[:2]
-    cond, marg, _ = distribution_2d(distribution_function(rgb, mapping))
+    cond, marg, _ = distribution_2d(*distribution_function(rgb, mapping))
     e.ints = {"mapping": mapping, "width": w, "height": h}
     e.f_data = np.concatenate([cond.ravel(), marg])    # (h, w + 1) conditional CDFs, then the marginal
     e.v_data = rgb.reshape(-1, 3)

@@ -17,14 +17,16 @@ def cdf_1d(f: np.ndarray) -> tuple[np.ndarray, float]:
     return cdf.astype(np.float32), integral
 
 
-def distribution_2d(f: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-    """(conditional CDFs (h, w + 1), marginal CDF (h + 1), integral) for f over [0, 1]²,
-    rows along v and columns along u."""
+def distribution_2d(f: np.ndarray, row_weight: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float]:
+    """(conditional CDFs (h, w + 1), marginal CDF (h + 1), integral) for f (times ``row_weight``
+    per row, in float64) over [0, 1]², rows along v and columns along u. Rows are weighted one at
+    a time, so a 16k map never needs a float64 copy of itself."""
     h, w = f.shape
     cond = np.empty((h, w + 1), dtype=np.float32)
     row_int = np.empty(h)
     for y in range(h):
-        cond[y], row_int[y] = cdf_1d(f[y])
+        row = f[y].astype(np.float64)
+        cond[y], row_int[y] = cdf_1d(row if row_weight is None else row * row_weight[y])
     marg, integral = cdf_1d(row_int)
     return cond, marg, integral
 

@@ -21,7 +21,7 @@ from renderer.scene.description import (CameraDesc, FilmDesc, InstanceSetDesc, I
 from renderer.scene.params import ParamSet
 from renderer.scene.parser import Directive
 from renderer.scene.plymesh import ply_mesh
-from renderer.scene.shapes import bilinear_mesh, disk, sphere, triangle_mesh
+from renderer.scene.shapes import MeshPool, bilinear_mesh, disk, sphere, triangle_mesh
 from renderer.scene.state import GraphicsState, ObjectDefinition, SavedState
 from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, UNSUPPORTED, WORLD_ONLY
 from renderer.scene.texture_params import read_texture
@@ -43,6 +43,7 @@ class Builder:
     def __init__(self, source: str) -> None:
         self.source = source             # the top-level file, for errors that belong to no line
         self.scene = SceneDescription(camera=CameraDesc(camera_to_world=np.eye(4)))
+        self.mesh_pool = MeshPool(self.scene.meshes)
         self.state = GraphicsState()
         self.saved: list[SavedState] = []
         self.named_coordinate_systems: dict[str, np.ndarray] = {}
@@ -340,7 +341,7 @@ class Builder:
         if make is None:
             self.unsupported(d.name, name, d.loc)
             return
-        mesh = make(d.params, d.loc)
+        mesh = self.mesh_pool.shape(name, make, d.params, d.loc)
         self.warn_unused(d)
         if len(mesh.indices) == 0:
             self.warn(d.loc, f'Shape "{name}" has no triangles; skipped')
@@ -354,9 +355,8 @@ class Builder:
                 raise SceneError("area lights inside ObjectBegin/ObjectEnd are not supported (nor by pbrt-v4)",
                                  d.loc)
             mesh = transformed_mesh(mesh, inverse(obj.ctm, "ObjectBegin", obj.loc) @ ctm)
-        self.scene.meshes.append(mesh)
         self.scene.shapes.append(ShapeDesc(
-            mesh=len(self.scene.meshes) - 1, material=self._current_material(d.loc),
+            mesh=self.mesh_pool.add(mesh), material=self._current_material(d.loc),
             area_light=self.state.area_light,
             reverse_orientation=self.state.reverse_orientation ^ swaps_handedness(ctm), loc=d.loc))
         index = len(self.scene.shapes) - 1

@@ -4,6 +4,7 @@ analytic ones; triangles are wound so that cross(p1 - p0, p2 - p0) points along 
 cross(dp/du, dp/dv), the side pbrt calls outside."""
 from __future__ import annotations
 
+import hashlib
 import math
 from typing import Callable
 
@@ -183,3 +184,50 @@ def _points(params: ParamSet, loc: Location, shape: str) -> np.ndarray:
 def _uvs(params: ParamSet) -> np.ndarray | None:
     """pbrt-v4 writes ``point2 uv``; pbrt-v3 files have ``float uv`` (or ``float st``)."""
     return params.floats("uv" if "uv" in params or "st" not in params else "st", ("point2", "float"))
+
+
+
+class MeshPool:
+    """The scene's meshes with identical ones stored once, as pbrt shares a shape's data: 20,000
+    ``Shape "sphere"`` lines of one radius become one tessellation (one BVH on the device) placed
+    20,000 times, not 20,000 copies. An analytic shape is tessellated once per distinct parameter
+    list; any other mesh merges with an earlier one whose arrays hold the same bytes (after any
+    object-space transform), so only truly equal meshes merge."""
+
+    #: Shapes whose tessellation is a pure function of their parameter list (no files read).
+    ANALYTIC = ("sphere", "disk")
+
+    def __init__(self, meshes: list[MeshDesc]):
+        self.meshes = meshes
+        self._by_bytes: dict[bytes, int] = {}
+        self._by_object: dict[int, int] = {}
+        self._by_params: dict[tuple, tuple[MeshDesc, list[str]]] = {}
+
+    def shape(self, name: str, make: Callable[[ParamSet, Location], MeshDesc], params: ParamSet,
+              loc: Location) -> MeshDesc:
+        """``make(params, loc)``, made once per parameter list for an analytic shape; a repeat
+        marks the same parameters read, so the unused-parameter warnings stay the same."""
+        if name not in self.ANALYTIC:
+            return make(params, loc)
+        key = (name, tuple(sorted((p.name, p.type, repr(p.values)) for p in params.params.values())))
+        if key not in self._by_params:
+            mesh = make(params, loc)
+            self._by_params[key] = (mesh, [n for n, p in params.params.items() if p.used])
+        mesh, read = self._by_params[key]
+        for n in read:
+            params.get(n)
+        return mesh
+
+    def add(self, mesh: MeshDesc) -> int:
+        """The index of ``mesh`` in the list, appending it only when no equal mesh is there."""
+        known = self._by_object.get(id(mesh))
+        if known is not None and self.meshes[known] is mesh:
+            return known
+        h = hashlib.blake2b(digest_size=20)
+        for a in (mesh.positions, mesh.indices, mesh.normals, mesh.uvs):
+            h.update(b"-" if a is None else np.ascontiguousarray(a).view(np.uint8).tobytes() + str(a.shape).encode())
+        index = self._by_bytes.setdefault(h.digest(), len(self.meshes))
+        if index == len(self.meshes):
+            self.meshes.append(mesh)
+        self._by_object[id(mesh)] = index
+        return index

@@ -25,8 +25,8 @@ def run(argv: list[str], capsys) -> tuple[int, str]:
     (["dunes", "--dune-height", "1e6"], "dune height must be at most"),
     (["dunes", "--smoothing-steps", "1000000000"], "smoothing steps must be 0..100"),
     (["sky", "--resolution", "8192"], "resolution must be 8..4096"),
-    (["shell-height", "--bands", "1000000000"], "growth bands must be 1..512"),
-    (["shell-bump", "--ridges", "100000"], "ridges must be 1..512"),
+    (["shell-height", "--bands", "1000000000"], "growth bands must be 1..16384"),
+    (["shell-bump", "--ridges", "100000"], "ridges must be 1..16384"),
     (["dunes", "--seed", "-1"], "seed must be a non-negative integer"),
 ])
 def test_out_of_range_options_are_refused_in_one_line(tmp_path, capsys, argv, needle):

@@ -191,3 +191,26 @@ def test_a_blackbody_below_the_srgb_gamut_emits_no_negative_component():
     warm = blackbody_rgb(1200.0)
     assert warm.min() == 0.0 and warm[0] > warm[1] > 0.0     # deep red: blue clipped, not negative
     assert np.all(blackbody_rgb(6500.0) > 0.5)
+
+
+def test_many_identical_spheres_share_one_tessellation(tmp_path):
+    """20,000 spheres once took 8 GB (one tessellation each); equal shapes now share one mesh,
+    and each line still warns about its own unused parameter."""
+    lines = [f'AttributeBegin\nTranslate {i} 0 0\nShape "sphere" "float radius" [0.5] "float bogus" [1]\nAttributeEnd'
+             for i in range(2000)]
+    lines.append('Shape "sphere" "float radius" [0.25]')
+    path = tmp_path / "spheres.pbrt"
+    path.write_text(HEAD + "\n".join(lines) + "\n")
+    desc = load_description(path)
+    assert len(desc.meshes) == 2 and len(desc.shapes) == 2001
+    assert sum('"float bogus"' in w for w in desc.warnings) == 2000
+    big, small = (np.ptp(m.positions[:, 0]) for m in desc.meshes)
+    assert big == pytest.approx(1.0, rel=1e-3) and small == pytest.approx(0.5, rel=1e-3)
+
+
+def test_equal_meshes_merge_only_when_their_bytes_are_equal(tmp_path):
+    tri = 'Shape "trianglemesh" "integer indices" [0 1 2] "point3 P" [0 0 0 1 0 0 0 1 {z}]\n'
+    path = tmp_path / "tris.pbrt"
+    path.write_text(HEAD + tri.format(z=0) + tri.format(z=0) + tri.format(z=1e-7))
+    desc = load_description(path)
+    assert [s.mesh for s in desc.shapes] == [0, 0, 1]
