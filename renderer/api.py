@@ -7,6 +7,7 @@ from typing import Callable
 
 import numpy as np
 
+from renderer.device.footprint import check_fits
 from renderer.device.runtime import init_warp
 from renderer.errors import RenderWarning
 from renderer.io.checkpoint import load_checkpoint
@@ -26,10 +27,13 @@ def load_scene(path: str | Path) -> SceneDescription:
 
 
 def open_session(scene: SceneDescription, settings: RenderSettings, device: str = "cpu", threads: int | None = None,
-                 resume: str | Path | None = None) -> RenderSession:
+                 resume: str | Path | None = None, memory_limit_gb: float | None = None) -> RenderSession:
     """Upload ``scene`` and get a session ready to render passes; with ``resume``, continue the
     checkpoint at that path (refused if it was made from another scene or with other settings).
-    ``render`` and the ``render`` command both start here."""
+    A scene estimated to need more than ``memory_limit_gb`` (default: this machine's memory) is
+    refused before anything is allocated. ``render`` and the ``render`` command both start here."""
+    limit = None if memory_limit_gb is None else int(memory_limit_gb * 2**30)
+    check_fits(scene, settings.width, settings.height, limit)
     session = RenderSession(scene, settings, device=device, threads=threads)
     if resume is not None:
         session.restore(load_checkpoint(resume), source=str(resume))

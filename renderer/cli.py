@@ -59,6 +59,16 @@ def _aov_list(text: str) -> tuple[str, ...]:
     return names
 
 
+def _gib(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        v = float("nan")
+    if not 0.0 < v < 2.0**40:                        # also refuses nan and inf
+        raise argparse.ArgumentTypeError(f"memory limit must be a positive number of GiB, got {text!r}")
+    return v
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="render", description="Render a pbrt-v4 scene with the Warp path tracer.")
     p.add_argument("scene", type=Path, help="pbrt-v4 scene file")
@@ -71,6 +81,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-depth", type=int, help="maximum path depth (default: the scene's Integrator maxdepth)")
     p.add_argument("--exposure", type=_exposure, default=0.0, help="PNG exposure in stops (default: 0)")
     p.add_argument("--threads", type=int, help="CPU worker threads (default: all cores)")
+    p.add_argument("--memory-limit", type=_gib, metavar="GIB", help="refuse a scene estimated to need more "
+                   "memory than this (default: this machine's memory)")
     p.add_argument("--no-nee", action="store_true", help="BSDF sampling only (no light sampling): for checks")
     p.add_argument("--rr-depth", type=int, help="Russian roulette from this path depth on (default 4; -1: off)")
     p.add_argument("--thin-film", metavar="MODE", help="thinfilm colour: rgb3 (the seed's 3 wavelengths) or "
@@ -244,7 +256,8 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
     for what, path in (("output", out), ("checkpoint", args.checkpoint), ("error log", args.error_log)):
         if path is not None:
             _check_writable(path, what)
-    session = open_session(scene, settings, device=args.device, threads=args.threads, resume=args.resume)
+    session = open_session(scene, settings, device=args.device, threads=args.threads, resume=args.resume,
+                           memory_limit_gb=args.memory_limit)
     for w in session.stats.warnings:
         print(f"warning: {w}", file=sys.stderr)
     if args.resume:

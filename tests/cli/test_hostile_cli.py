@@ -190,3 +190,16 @@ def test_only_our_own_messages_reach_stderr(tmp_path):
                          capture_output=True, text=True, timeout=120)
     assert run.returncode == EXIT_BAD_INPUT
     assert run.stderr.splitlines() == [f"render: error: output must end in .exr or .png, got {tmp_path / 'o.tiff'}"]
+
+
+def test_a_scene_too_big_for_the_memory_limit_is_refused_before_upload(tmp_path, capsys):
+    p = scene(tmp_path, w=4000, h=4000)            # 16 M pixels: the film alone needs about 0.7 GiB
+    line = refused(capsys, [str(p), "-o", str(tmp_path / "o.exr"), "--memory-limit", "0.5"], "GiB limit")
+    assert str(p) in line and "needs about" in line
+    assert not (tmp_path / "o.exr").exists()
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "nan", "inf", "lots"])
+def test_memory_limit_must_be_a_positive_number(tmp_path, capsys, value):
+    refused(capsys, [str(scene(tmp_path)), "-o", str(tmp_path / "o.exr"), "--memory-limit", value],
+            "memory limit must be a positive number of GiB")

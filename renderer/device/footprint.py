@@ -1,0 +1,90 @@
+"""How much memory a scene will take to render, estimated from its description before anything
+is allocated, so a scene that cannot fit is refused with a number instead of ending in an
+out-of-memory kill halfway through an upload.
+
+The estimate counts the large arrays only, each as many times as it is held at the peak of an
+upload: meshes on the host and on the device plus Warp's BVH nodes; instances with their
+transforms and the top-level BVH; image textures and environment maps decoded to float32, then
+pooled and copied to the device (with their sampling CDFs); the film's float64 sums. Image
+sizes come from file headers (no decoding). It is meant to be within a factor of two of the
+measured peak (tests check it against real renders), which is enough to tell a 2 GB scene
+from a 40 GB one."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from renderer.errors import RenderError
+from renderer.scene.description import SceneDescription
+
+#: bytes per vertex (float32 position, normal, uv) and per triangle (int32 indices) of a mesh
+_VERTEX, _TRIANGLE = 32, 12
+#: Warp's BVH: about two nodes of two float32 bounds per triangle, on the device
+_BVH_PER_TRIANGLE = 64
+#: one instance: float64 transforms on the host, float32 world and object matrices and bounds on
+#: the device, and its top-level BVH nodes
+_INSTANCE = 256
+#: a decoded RGB float32 texel, held in the decoded image, the texture pool and the device copy
+_TEXEL = 12 * 3
+#: an environment texel: its RGB plus its CDF entry, held about three times while uploading
+_ENV_TEXEL = 16 * 3
+#: a film pixel: float64 RGB sums plus the float32 image and per-row scratch
+_PIXEL = 48
+#: what the process itself takes before a scene (Python, numpy, Warp, the kernels)
+_BASE = 300 * 2**20
+
+
+def machine_memory() -> int:
+    """This machine's physical memory in bytes."""
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+
+
+def image_size(path: Path) -> tuple[int, int]:
+    """(width, height) of an image file from its header; (0, 0) when it cannot be read (reading it
+    for real reports the error with the scene's location)."""
+    try:
+        if path.suffix.lower() == ".exr":
+            import OpenEXR
+
+            with OpenEXR.File(str(path), header_only=True) as f:
+                lo, hi = f.header()["dataWindow"]
+                return int(hi[0] - lo[0] + 1), int(hi[1] - lo[1] + 1)
+        from PIL import Image
+
+        with Image.open(path) as im:
+            return im.size
+    except Exception:   # any decoder's error: the real read reports it properly
+        return 0, 0
+
+
+def _texels(path: Path) -> int:
+    w, h = image_size(path)
+    return w * h
+
+
+def estimate(desc: SceneDescription, width: int, height: int) -> int:
+    """Bytes the render of ``desc`` at width x height is expected to hold at its peak."""
+    total = _BASE + width * height * _PIXEL
+    for m in desc.meshes:
+        total += 2 * len(m.positions) * _VERTEX + len(m.indices) * (2 * _TRIANGLE + _BVH_PER_TRIANGLE)
+    total += sum(len(s.transforms) * len(s.shapes) for s in desc.instance_sets) * _INSTANCE
+    for t in desc.textures.values():
+        name = t.params.params.get("filename")
+        if t.kind == "imagemap" and name is not None and name.values:
+            total += _texels(t.base_dir / str(name.values[0])) * _TEXEL
+    for light in desc.lights:
+        fname = light.values.get("filename") if light.kind == "infinite" else None
+        if fname:
+            total += _texels(Path(fname)) * _ENV_TEXEL
+    return total
+
+
+def check_fits(desc: SceneDescription, width: int, height: int, limit_bytes: int | None = None) -> int:
+    """The estimate, or RenderError if it exceeds ``limit_bytes`` (default: this machine's memory)."""
+    need = estimate(desc, width, height)
+    limit = machine_memory() if limit_bytes is None else limit_bytes
+    if need > limit:
+        raise RenderError(f"{desc.path or 'the scene'}: rendering needs about {need / 2**30:.1f} GiB, more than the "
+                          f"{limit / 2**30:.1f} GiB limit (this machine's memory unless --memory-limit says "
+                          "otherwise); lower the resolution, texture sizes or instance counts, or raise the limit")
+    return need

@@ -1,0 +1,66 @@
+"""The memory estimate is within a factor of two of what a render really takes at its peak,
+for scenes dominated by meshes, instances, textures, environment maps or the film."""
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from renderer.api import load_scene
+from renderer.device.footprint import estimate, image_size
+
+ROOT = Path(__file__).resolve().parents[2]
+HEAD = 'Camera "perspective"\nFilm "rgb" "integer xresolution" [{w}] "integer yresolution" [{h}]\nWorldBegin\n'
+
+PEAK = """import resource, sys
+from renderer.api import load_scene
+from renderer.device.scene import upload
+from renderer.device.film import Film
+desc = load_scene(sys.argv[1]); ds = upload(desc, "cpu"); film = Film(ds.width, ds.height, "cpu")
+print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024)
+"""
+
+
+def _peak_bytes(path: Path) -> int:
+    run = subprocess.run([sys.executable, "-c", PEAK, str(path)], capture_output=True, text=True, cwd=ROOT,
+                         timeout=600)
+    assert run.returncode == 0, run.stderr
+    return int(run.stdout.split()[-1])
+
+
+@pytest.mark.parametrize("kind", ["spheres", "instances", "texture", "environment", "film"])
+def test_the_estimate_is_within_a_factor_of_two_of_the_measured_peak(tmp_path, kind):
+    w, h, body = 8, 8, 'LightSource "distant" "rgb L" [1 1 1]\n'
+    if kind == "spheres":       # 3000 spheres of distinct radii: 3000 meshes
+        body += "".join(f'Shape "sphere" "float radius" [{1 + i * 1e-3}]\n' for i in range(3000))
+    elif kind == "instances":
+        np.save(tmp_path / "t.npy", np.tile(np.eye(4), (400_000, 1, 1)))
+        body += 'ObjectBegin "o"\nShape "sphere"\nObjectEnd\nObjectInstance "o" "string transforms" "t.npy"\n'
+    elif kind == "texture":
+        Image.fromarray(np.full((3000, 3000, 3), 100, np.uint8)).save(tmp_path / "t.png")
+        body += ('Texture "t" "spectrum" "imagemap" "string filename" "t.png"\n'
+                 'Material "diffuse" "texture reflectance" "t"\nShape "sphere"\n')
+    elif kind == "environment":
+        Image.fromarray(np.full((1500, 3000, 3), 100, np.uint8)).save(tmp_path / "env.png")
+        body = 'LightSource "infinite" "string filename" "env.png"\nShape "sphere"\n'
+    else:
+        w, h, body = 4000, 3000, body + 'Shape "sphere"\n'
+    path = tmp_path / "s.pbrt"
+    path.write_text(HEAD.format(w=w, h=h) + body)
+    guess, peak = estimate(load_scene(path), w, h), _peak_bytes(path)
+    assert peak / 2 < guess < 2 * peak, f"estimate {guess / 2**20:.0f} MB, measured {peak / 2**20:.0f} MB"
+
+
+def test_image_sizes_come_from_headers(tmp_path):
+    from renderer.io.images import write_exr
+
+    Image.fromarray(np.zeros((5, 7, 3), np.uint8)).save(tmp_path / "a.png")
+    write_exr(tmp_path / "b.exr", np.zeros((3, 11, 3), np.float32))
+    (tmp_path / "c.exr").write_bytes(b"junk")
+    assert image_size(tmp_path / "a.png") == (7, 5)
+    assert image_size(tmp_path / "b.exr") == (11, 3)
+    assert image_size(tmp_path / "c.exr") == (0, 0)
