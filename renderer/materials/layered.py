@@ -29,8 +29,8 @@ from typing import Any
 
 import warp as wp
 
-from renderer.materials.bsdf import (FIRST_DERIVED_FLAG, DIFFUSE, GLOSSY, REFLECTION, SPECULAR, TRANSMISSION, BSDFEval, BSDFSample,
-                                     failed_sample)
+from renderer.materials.bsdf import (DIFFUSE, FIRST_DERIVED_FLAG, GLOSSY, REFLECTION, SPECULAR, TRANSMISSION,
+                                     BSDFEval, BSDFSample, failed_sample)
 from renderer.materials.conductor import conductor_eval, conductor_sample
 from renderer.materials.dielectric import dielectric_eval, dielectric_sample
 from renderer.materials.diffuse import lambert_eval, lambert_sample
@@ -68,8 +68,9 @@ FIRST_FREE_FLAG = 1 << (_SAMPLES_SHIFT + 6)
 
 def walk_flags(values: dict[str, Any]) -> int:
     """The derived flag bits that carry ``maxdepth`` and ``nsamples`` to the device."""
-    depth = values.get("maxdepth", 10)
-    samples = values.get("nsamples", 1)
+    defaults = {p.name: p.default for p in SLAB_PARAMS}
+    depth = values.get("maxdepth", defaults["maxdepth"])
+    samples = values.get("nsamples", defaults["nsamples"])
     return (depth << _DEPTH_SHIFT) | (samples << _SAMPLES_SHIFT)
 
 

@@ -175,6 +175,16 @@ def test_same_seed_same_estimate():
     assert np.array_equal(a, b) and not np.array_equal(a, c)
 
 
+def test_more_walks_per_evaluation_same_mean():
+    """nsamples averages independent walks: the mean of f is unchanged, its spread shrinks."""
+    pairs = [((0.3, 0.2, 0.9), (-0.5, 0.4, 0.6))]
+    values = dict(reflectance=0.8, roughness=0.2, albedo=0.6, thickness=0.3)
+    one, e1 = mean_f("coateddiffuse", values, pairs, n=20_000)
+    four, e4 = mean_f("coateddiffuse", values | dict(nsamples=4), pairs, n=20_000, seed=8)
+    assert np.allclose(one, four, atol=5 * np.hypot(e1, e4).max())
+    assert e4.max() < 0.7 * e1.max()
+
+
 def test_parameters_follow_pbrt():
     v = material("coatedconductor", **{"interface.roughness": 0.1}).values
     assert v == {"interface.roughness": 0.1}
