@@ -45,38 +45,32 @@ def _alpha(b: BSDF) -> wp.vec2:
 
 
 @wp.func
-def _fresnel(b: BSDF, cos_i: float) -> wp.vec3:
-    eta = b.p[SLOT.eta]
-    k = b.p[SLOT.k]
-    if (b.flags & ARTIST) != 0:
-        # pbrt-v4: an artist reflectance r maps to eta = 1, k = 2 sqrt(r) / sqrt(1 - r)
-        r = b.p[SLOT.reflectance]
-        eta = wp.vec3(1.0)
-        k = wp.vec3(2.0 * wp.sqrt(r[0]) / wp.sqrt(1.0 - r[0]), 2.0 * wp.sqrt(r[1]) / wp.sqrt(1.0 - r[1]),
-                    2.0 * wp.sqrt(r[2]) / wp.sqrt(1.0 - r[2]))
-    return fresnel_conductor(cos_i, eta, k)
+def artist_k(r: wp.vec3) -> wp.vec3:
+    """pbrt-v4: an artist reflectance r at normal incidence maps to eta = 1, k = 2 sqrt(r) / sqrt(1 - r)."""
+    return wp.vec3(2.0 * wp.sqrt(r[0]) / wp.sqrt(1.0 - r[0]), 2.0 * wp.sqrt(r[1]) / wp.sqrt(1.0 - r[1]),
+                   2.0 * wp.sqrt(r[2]) / wp.sqrt(1.0 - r[2]))
 
 
 @wp.func
-def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+def conductor_eval(eta: wp.vec3, k: wp.vec3, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+    """The rough conductor lobe (two-sided) of complex relative index eta + i k."""
     e = BSDFEval()
-    alpha = _alpha(b)
     if is_smooth(alpha) or not same_hemisphere(wo, wi):
         return e
     sgn = wp.where(wo[2] < 0.0, -1.0, 1.0)
     o = signed_z(wo, sgn)
     i = signed_z(wi, sgn)
     wm = wp.normalize(o + i)
-    e.f = _fresnel(b, wp.dot(o, wm)) * (ggx_D(wm, alpha) * ggx_G(o, i, alpha) / (4.0 * o[2] * i[2]))
+    e.f = fresnel_conductor(wp.dot(o, wm), eta, k) * (ggx_D(wm, alpha) * ggx_G(o, i, alpha) / (4.0 * o[2] * i[2]))
     e.pdf = ggx_visible_pdf(o, wm, alpha) / (4.0 * wp.abs(wp.dot(o, wm)))
     return e
 
 
 @wp.func
-def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
-    alpha = _alpha(b)
+def conductor_sample(eta: wp.vec3, k: wp.vec3, alpha: wp.vec2, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+    """A mirror direction (smooth) or a GGX visible-normal reflection (rough)."""
     if is_smooth(alpha):
-        return delta_sample(reflect_z(wo), _fresnel(b, wo[2]), 1.0, REFLECTION | SPECULAR)
+        return delta_sample(reflect_z(wo), fresnel_conductor(wo[2], eta, k), 1.0, REFLECTION | SPECULAR)
     sgn = wp.where(wo[2] < 0.0, -1.0, 1.0)
     o = signed_z(wo, sgn)
     wm = ggx_sample_visible(o, alpha, wp.vec2(u[0], u[1]))
@@ -84,4 +78,26 @@ def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
     if i[2] <= 0.0:
         return failed_sample()
     wi = signed_z(i, sgn)
-    return sampled(wo, wi, eval_pdf(b, wo, wi), GLOSSY)
+    return sampled(wo, wi, conductor_eval(eta, k, alpha, wo, wi), GLOSSY)
+
+
+@wp.func
+def _eta(b: BSDF) -> wp.vec3:
+    return wp.where((b.flags & ARTIST) != 0, wp.vec3(1.0), b.p[SLOT.eta])
+
+
+@wp.func
+def _k(b: BSDF) -> wp.vec3:
+    if (b.flags & ARTIST) != 0:
+        return artist_k(b.p[SLOT.reflectance])
+    return b.p[SLOT.k]
+
+
+@wp.func
+def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+    return conductor_eval(_eta(b), _k(b), _alpha(b), wo, wi)
+
+
+@wp.func
+def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+    return conductor_sample(_eta(b), _k(b), _alpha(b), wo, u)

@@ -54,10 +54,28 @@ def _half_vector(wo: wp.vec3, wi: wp.vec3, eta: float) -> wp.vec4:
 
 
 @wp.func
-def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+def _choice(F: float, sides: int) -> wp.vec2:
+    """The probabilities of choosing reflection and transmission (pbrt's pr, pt normalised) when
+    ``sides`` (REFLECTION | TRANSMISSION, or one of them) may be sampled."""
+    if sides == REFLECTION:
+        return wp.vec2(wp.where(F > 0.0, 1.0, 0.0), 0.0)
+    if sides == TRANSMISSION:
+        return wp.vec2(0.0, wp.where(F < 1.0, 1.0, 0.0))
+    return wp.vec2(F, 1.0 - F)
+
+
+@wp.func
+def _reflects(F: float, sides: int, u: float) -> bool:
+    if sides == REFLECTION | TRANSMISSION:
+        return u < F
+    return sides == REFLECTION
+
+
+@wp.func
+def dielectric_eval(eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
+    """The rough dielectric lobes at (wo, wi); the density is that of ``dielectric_sample`` with the
+    same ``sides``. ``radiance`` false is pbrt's importance transport: no 1/eta'^2 on refraction."""
     e = BSDFEval()
-    eta = b.p[SLOT.eta][0]
-    alpha = _alpha(b)
     if eta == 1.0 or is_smooth(alpha):
         return e
     h = _half_vector(wo, wi, eta)
@@ -66,40 +84,48 @@ def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
     wm = wp.vec3(h[0], h[1], h[2])
     etap = h[3]
     F = fresnel_dielectric(wp.dot(wo, wm), eta)
+    P = _choice(F, sides)
     D = ggx_D(wm, alpha)
     G = ggx_G(wo, wi, alpha)
     vis = ggx_visible_pdf(wo, wm, alpha)
     if wo[2] * wi[2] > 0.0:
         e.f = wp.vec3(D * G * F / wp.abs(4.0 * wi[2] * wo[2]))
-        e.pdf = vis / (4.0 * wp.abs(wp.dot(wo, wm))) * F
+        e.pdf = vis / (4.0 * wp.abs(wp.dot(wo, wm))) * P[0]
         return e
     denom = wp.dot(wi, wm) + wp.dot(wo, wm) / etap
     denom2 = denom * denom
     ft = D * (1.0 - F) * G * wp.abs(wp.dot(wi, wm) * wp.dot(wo, wm) / (denom2 * wi[2] * wo[2]))
-    e.f = wp.vec3(ft / (etap * etap))
-    e.pdf = vis * wp.abs(wp.dot(wi, wm)) / denom2 * (1.0 - F)
+    if radiance:
+        ft = ft / (etap * etap)
+    e.f = wp.vec3(ft)
+    e.pdf = vis * wp.abs(wp.dot(wi, wm)) / denom2 * P[1]
     return e
 
 
 @wp.func
-def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
-    eta = b.p[SLOT.eta][0]
-    alpha = _alpha(b)
+def dielectric_sample(eta: float, alpha: wp.vec2, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
+    """A reflected or refracted direction (only from ``sides``), smooth or rough; see dielectric_eval."""
     if eta == 1.0 or is_smooth(alpha):
         R = fresnel_dielectric(wo[2], eta)
-        if u[2] < R:
-            return delta_sample(reflect_z(wo), wp.vec3(1.0), R, REFLECTION | SPECULAR)
+        P = _choice(R, sides)
+        if _reflects(R, sides, u[2]):
+            if P[0] == 0.0:
+                return failed_sample()
+            return delta_sample(reflect_z(wo), wp.vec3(R / P[0]), P[0], REFLECTION | SPECULAR)
         t = refract(wo, wp.vec3(0.0, 0.0, 1.0), eta)
-        if t[3] == 0.0:
+        if t[3] == 0.0 or P[1] == 0.0:
             return failed_sample()
-        s = delta_sample(wp.vec3(t[0], t[1], t[2]), wp.vec3(1.0 / (t[3] * t[3])), 1.0 - R, TRANSMISSION | SPECULAR)
+        w = (1.0 - R) / P[1]
+        if radiance:
+            w = w / (t[3] * t[3])
+        s = delta_sample(wp.vec3(t[0], t[1], t[2]), wp.vec3(w), P[1], TRANSMISSION | SPECULAR)
         s.eta = t[3]
         return s
     wm = ggx_sample_visible(wo, alpha, wp.vec2(u[0], u[1]))
     R = fresnel_dielectric(wp.dot(wo, wm), eta)
     wi = wp.vec3(0.0)
     eta_t = float(0.0)
-    if u[2] < R:
+    if _reflects(R, sides, u[2]):
         wi = wm * (2.0 * wp.dot(wo, wm)) - wo
         if wi[2] * wo[2] <= 0.0:
             return failed_sample()
@@ -111,6 +137,16 @@ def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
         if wi[2] * wo[2] >= 0.0:
             return failed_sample()
         eta_t = t[3]
-    s = sampled(wo, wi, eval_pdf(b, wo, wi), GLOSSY)
+    s = sampled(wo, wi, dielectric_eval(eta, alpha, wo, wi, sides, radiance), GLOSSY)
     s.eta = eta_t
     return s
+
+
+@wp.func
+def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+    return dielectric_eval(b.p[SLOT.eta][0], _alpha(b), wo, wi, REFLECTION | TRANSMISSION, True)
+
+
+@wp.func
+def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+    return dielectric_sample(b.p[SLOT.eta][0], _alpha(b), wo, u, REFLECTION | TRANSMISSION, True)

@@ -16,16 +16,17 @@ SLOT = PARAMS.slots
 
 
 @wp.func
-def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+def lambert_eval(r: wp.vec3, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+    """A two-sided Lambertian lobe of albedo r, cosine-sampled."""
     e = BSDFEval()
     if same_hemisphere(wo, wi):
-        e.f = b.p[SLOT.reflectance] * INV_PI
+        e.f = r * INV_PI
         e.pdf = wp.abs(wi[2]) * INV_PI
     return e
 
 
 @wp.func
-def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+def lambert_sample(r: wp.vec3, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
     wi = cosine_hemisphere(wp.vec2(u[0], u[1]))
     if wo[2] < 0.0:
         wi = wp.vec3(wi[0], wi[1], -wi[2])
@@ -34,6 +35,16 @@ def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
     s.pdf = wp.abs(wi[2]) * INV_PI
     if s.pdf <= 0.0:
         return failed_sample()
-    s.weight = b.p[SLOT.reflectance]
+    s.weight = r
     s.flags = REFLECTION | DIFFUSE
     return s
+
+
+@wp.func
+def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+    return lambert_eval(b.p[SLOT.reflectance], wo, wi)
+
+
+@wp.func
+def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+    return lambert_sample(b.p[SLOT.reflectance], wo, u)

@@ -10,19 +10,29 @@ import warp as wp
 from renderer.parameters import Parameter
 from renderer.vecmath import PI
 
+
+def roughness_params(prefix: str = "") -> tuple[Parameter, ...]:
+    """pbrt-v4's three roughness parameters, optionally prefixed (``interface.``, ``conductor.``)."""
+    return (
+        Parameter(f"{prefix}roughness", "float", 0.0, 0.0, texture=True,
+                  doc=f"shorthand for {prefix}uroughness = {prefix}vroughness"),
+        Parameter(f"{prefix}uroughness", "float", None, 0.0, texture=True,
+                  doc=f"roughness along u (default: {prefix}roughness)"),
+        Parameter(f"{prefix}vroughness", "float", None, 0.0, texture=True,
+                  doc=f"roughness along v (default: {prefix}roughness)"),
+    )
+
+
+REMAP_ROUGHNESS = Parameter("remaproughness", "bool", True,
+                            doc="alpha = sqrt(roughness) when true (else roughness is alpha)")
 #: pbrt-v4's roughness parameters of ``conductor`` and ``dielectric``.
-ROUGHNESS_PARAMS = (
-    Parameter("roughness", "float", 0.0, 0.0, texture=True, doc="shorthand for uroughness = vroughness"),
-    Parameter("uroughness", "float", None, 0.0, texture=True, doc="roughness along u (default: roughness)"),
-    Parameter("vroughness", "float", None, 0.0, texture=True, doc="roughness along v (default: roughness)"),
-    Parameter("remaproughness", "bool", True, doc="alpha = sqrt(roughness) when true (else roughness is alpha)"),
-)
+ROUGHNESS_PARAMS = (*roughness_params(), REMAP_ROUGHNESS)
 
 
-def resolve_roughness(values: dict[str, Any]) -> dict[str, Any]:
+def resolve_roughness(values: dict[str, Any], prefix: str = "") -> dict[str, Any]:
     """pbrt's ``roughness`` shorthand: the value of uroughness and vroughness where those are not given."""
-    r = values.get("roughness", 0.0)
-    return {"uroughness": r, "vroughness": r} | values
+    r = values.get(f"{prefix}roughness", 0.0)
+    return {f"{prefix}uroughness": r, f"{prefix}vroughness": r} | values
 
 
 @wp.func

@@ -25,7 +25,7 @@ def scene(tmp_path: Path, body: str) -> Path:
 
 
 UNSUPPORTED = """LightSource "infinite" "rgb L" [1 1 1]
-Material "coateddiffuse"
+Material "measured"
 Shape "sphere"
 Texture "t" "float" "noise"
 Material "hair"
@@ -40,7 +40,7 @@ def test_every_unsupported_type_is_reported_at_once_with_its_line(tmp_path):
     lines = str(info.value).splitlines()
     assert len(lines) == 3, lines
     assert [int(ln.split(":")[1]) for ln in lines] == [7, 9, 10]
-    assert "coateddiffuse" in lines[0] and "unknown texture class \"noise\"" in lines[1] and "hair" in lines[2]
+    assert "measured" in lines[0] and "unknown texture class \"noise\"" in lines[1] and "hair" in lines[2]
 
 
 def test_cli_prints_every_unsupported_type(tmp_path, capsys):

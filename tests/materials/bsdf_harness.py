@@ -77,14 +77,18 @@ def _kernel(name: str):
 
 def bsdf_moments(name: str, values: dict[str, Any], wo, n: int = 400_000, seed: int = 1) -> dict[str, np.ndarray]:
     """Estimates of ∫pdf, ∫f|cos| (uniform sampling), E[sample weight] (importance sampling),
-    the largest sample/eval_pdf inconsistency and the lobe flags seen, for a material with the
+    its non-delta part, the largest sample/eval_pdf inconsistency (meaningless for materials whose
+    f is an estimate) and the lobe flags seen, for a material with the
     given constant parameter values (defaults for the rest)."""
     out = wp.zeros((n, 4), dtype=wp.vec3, device="cpu")
     wp.launch(_kernel(name), dim=n, inputs=[*_bsdf_inputs(name, values), _unit(wo), seed, out], device="cpu")
     o = out.numpy()
     ok = o[:, 3, 2] > 0
+    nonspec = ok & ((o[:, 3, 1].astype(int) & SPECULAR) == 0)
     return {"pdf_integral": o[:, 0, 0].mean(), "albedo_uniform": o[:, 1].mean(axis=0),
             "albedo_sampled": o[:, 2].mean(axis=0), "max_inconsistency": o[:, 3, 0].max(),
+            "albedo_sampled_nonspecular": np.where(nonspec[:, None], o[:, 2], 0.0).mean(axis=0),
+            "albedo_sampled_stderr": o[:, 2].std(axis=0) / np.sqrt(n),
             "albedo_uniform_stderr": o[:, 1].std(axis=0) / np.sqrt(n),
             "lobe_flags": set(o[ok, 3, 1].astype(int).tolist())}
 
@@ -147,3 +151,85 @@ def chi2_pvalue(name: str, values: dict[str, Any], wo, n: int = 200_000, z_bins:
     keep = exp > 0
     stat = ((obs[keep] - exp[keep]) ** 2 / exp[keep]).sum()
     return float(chi2.sf(stat, keep.sum() - 1))
+
+
+@lru_cache(maxsize=None)
+def _mean_f_kernel(name: str):
+    mod = REGISTRY[name]
+
+    @wp.kernel(module="unique")
+    def mean_f(p: Slots, flags: int, kind: int, wo: wp.array(dtype=wp.vec3), wi: wp.array(dtype=wp.vec3),
+               seed: int, out: wp.array(dtype=wp.vec3, ndim=2)):
+        i, j = wp.tid()
+        b = _bsdf(p, flags, kind)
+        rng = wp.rand_init(seed, i * 65536 + j)
+        b.wavelength_u = wp.randf(rng)
+        out[i, j] = wp.static(mod.eval_pdf)(b, wo[i], wi[i]).f
+
+    return mean_f
+
+
+def mean_f(name: str, values: dict[str, Any], pairs: list[tuple], n: int = 4000, seed: int = 5):
+    """Mean and standard error over n per-sample seeds (``wavelength_u``) of a stochastic f(wo, wi),
+    for each (wo, wi) pair: materials whose eval_pdf is an estimate (the layered ones)."""
+    wo = wp.array(np.array([_unit(a) for a, _ in pairs], dtype=np.float32), dtype=wp.vec3, device="cpu")
+    wi = wp.array(np.array([_unit(c) for _, c in pairs], dtype=np.float32), dtype=wp.vec3, device="cpu")
+    out = wp.zeros((len(pairs), n), dtype=wp.vec3, device="cpu")
+    wp.launch(_mean_f_kernel(name), dim=(len(pairs), n), inputs=[*_bsdf_inputs(name, values), wo, wi, seed, out],
+              device="cpu")
+    o = out.numpy()
+    return o.mean(axis=1), o.std(axis=1) / np.sqrt(n)
+
+
+@lru_cache(maxsize=None)
+def _cell_kernel(name: str):
+    mod = REGISTRY[name]
+
+    @wp.kernel(module="unique")
+    def cells(p: Slots, flags: int, kind: int, wo: wp.vec3, seed: int, out: wp.array(dtype=wp.vec4, ndim=2)):
+        i = wp.tid()
+        rng = wp.rand_init(seed, i)
+        b = _bsdf(p, flags, kind)
+        b.wavelength_u = wp.randf(rng)
+        s = wp.static(mod.sample)(b, wo, wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)))
+        v = float(0.0)
+        if s.pdf > 0.0 and (s.flags & SPECULAR) == 0:
+            v = (s.weight[0] + s.weight[1] + s.weight[2]) / 3.0
+        out[i, 0] = wp.vec4(s.wi[0], s.wi[1], s.wi[2], v)
+        wu = uniform_sphere(wp.vec2(wp.randf(rng), wp.randf(rng)))
+        f = wp.static(mod.eval_pdf)(b, wo, wu).f
+        out[i, 1] = wp.vec4(wu[0], wu[1], wu[2], (f[0] + f[1] + f[2]) / 3.0 * wp.abs(wu[2]) * 4.0 * 3.14159265358979)
+
+    return cells
+
+
+def _cell_of(d: np.ndarray, z_bins: int, phi_bins: int) -> np.ndarray:
+    zi = np.clip(((d[:, 2] + 1) / 2 * z_bins).astype(int), 0, z_bins - 1)
+    fi = np.clip(((np.arctan2(d[:, 1], d[:, 0]) % (2 * np.pi)) / (2 * np.pi) * phi_bins).astype(int), 0, phi_bins - 1)
+    return zi * phi_bins + fi
+
+
+def weighted_cells_pvalue(name: str, values: dict[str, Any], wo, n: int = 200_000, z_bins: int = 8,
+                          phi_bins: int = 12, seed: int = 9) -> float:
+    """Chi-square p-value that ``sample``'s non-delta directions, weighted by their sample weights,
+    put the same reflected energy into each (cos θ, φ) cell as ``eval_pdf``'s f |cos| integrated by
+    uniform sampling: the check for a sampler whose exact density has no closed form (pbrt's
+    layered BSDF), where direction counts cannot be compared with eval_pdf's approximate pdf."""
+    from scipy.stats import chi2
+
+    out = wp.zeros((n, 2), dtype=wp.vec4, device="cpu")
+    wp.launch(_cell_kernel(name), dim=n, inputs=[*_bsdf_inputs(name, values), _unit(wo), seed, out], device="cpu")
+    o = out.numpy()
+    m = z_bins * phi_bins
+    stats = []
+    for k in range(2):
+        c = _cell_of(o[:, k, :3], z_bins, phi_bins)
+        v = o[:, k, 3]
+        s1 = np.bincount(c, weights=v, minlength=m) / n
+        s2 = np.bincount(c, weights=v * v, minlength=m) / n
+        stats.append((s1, (s2 - s1 ** 2) / n))
+    (a, va), (b, vb) = stats
+    keep = (va + vb) > 0
+    keep &= (a + b) > 1e-3 * (a + b).sum()
+    stat = ((a[keep] - b[keep]) ** 2 / (va[keep] + vb[keep])).sum()
+    return float(chi2.sf(stat, keep.sum()))

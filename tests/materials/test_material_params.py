@@ -45,7 +45,7 @@ def test_undeclared_parameters_warn_at_load_time(tmp_path):
 
 
 def test_unknown_and_interface_materials_are_refused_at_load_time(tmp_path):
-    for kind in ("coateddiffuse", "interface", ""):
+    for kind in ("hair", "interface", ""):
         with pytest.raises(UnsupportedError, match="not supported") as info:
             load(tmp_path, f'Material "{kind}"\nShape "sphere"\n')
         assert info.value.loc.line == 4
@@ -74,8 +74,10 @@ def test_slot_layout_comes_from_the_declaration():
     for name, module in REGISTRY.items():
         assert len(module.PARAMS.slot_names) <= MAX_SLOTS, name
         defaults = {p.name: p.default for p in module.PARAMS}
-        if "uroughness" in defaults:                        # pbrt's shorthand: roughness sets both
-            defaults |= {"uroughness": defaults["roughness"], "vroughness": defaults["roughness"]}
+        for pre in ("", "interface.", "conductor."):        # pbrt's shorthand: roughness sets both
+            if f"{pre}uroughness" in defaults:
+                r = defaults[f"{pre}roughness"]
+                defaults |= {f"{pre}uroughness": r, f"{pre}vroughness": r}
         layout, _ = device_layout(material(name))
         assert [(p.name, v) for p, v in layout] == [(n, defaults[n]) for n in module.PARAMS.slot_names], name
     rows, flags = constant_rows("disney", dict(thin=True, roughness=0.2))
