@@ -1,9 +1,12 @@
 """The seed's ``thinfilm`` (an extension; pbrt has no such material): a smooth interface coated
-with one thin dielectric film, whose interference colours the specular reflection.
+with one thin dielectric film, or a multilayer stack, whose interference colours the specular
+reflection.
 
 Layers, from the side the normal points to: outer medium ``eta_outer`` | film ``eta_film``,
-``thickness`` nm | substrate ``eta_inner`` + i ``k_inner``. Reflectance R and transmittance T
-come from :mod:`renderer.optics` (Airy summation, s and p averaged), converted to RGB either at
+``thickness`` nm | substrate ``eta_inner`` + i ``k_inner``. A stack (``layer_eta`` and friends,
+:mod:`renderer.materials.stack`) replaces the film by its layers, read from the scene's layer
+table. Reflectance R and transmittance T come from :mod:`renderer.optics` (Airy summation for one
+film, Rouard's recursion for a stack; s and p averaged), converted to RGB either at
 the seed's three wavelengths (``rgb3``) or by integrating N jittered wavelengths against the CIE
 observer (``spectral:N``, the render option). Lobes:
 
@@ -22,11 +25,14 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 import warp as wp
 
 from renderer.errors import Location, SceneError
 from renderer.materials.bsdf import (BSDF, DIFFUSE, REFLECTION, SPECULAR, TRANSMISSION, BSDFEval, BSDFSample,
                                      delta_sample, failed_sample, reflect_z, refract, same_hemisphere)
+from renderer.materials.stack import STACK_PARAMS, resolve_stack, stack_rows
+from renderer.optics.multilayer import multilayer_rgb3, multilayer_rgb_sampled
 from renderer.optics.thin_film import thin_film_rgb3, thin_film_rgb_sampled
 from renderer.parameters import Parameter, Parameters
 from renderer.sampling.warps import cosine_hemisphere
@@ -38,22 +44,29 @@ PARAMS = Parameters(
     Parameter("eta_film", "float", 1.55, 1.0e-3, texture=True, doc="index of the film"),
     Parameter("eta_inner", "float", 1.66, 1.0e-3, texture=True, doc="real index of the substrate"),
     Parameter("k_inner", "float", 0.0, 0.0, doc="imaginary index of the substrate (a metal)"),
-    Parameter("thickness", "float", 500.0, 0.0, texture=True, doc="film thickness (nm)"),
+    Parameter("thickness", "float", 500.0, 0.0, texture=True, doc="film thickness (nm); a stack's is its total"),
     Parameter("thicknessmap", "float", 0.0, texture=True, doc="added to the thickness, times thicknessscale (nm)"),
     Parameter("thicknessscale", "float", 1.0, doc="factor of thicknessmap"),
     Parameter("transmission", "bool", False, doc="a clear substrate refracts what the film transmits"),
     Parameter("reflectance", "rgb", 0.0, 0.0, 1.0, texture=True,
               doc="albedo of an opaque substrate's Lambertian base"),
+    *STACK_PARAMS,
 )
 SLOT = PARAMS.slots
 FLAG = PARAMS.flags
 
 
 def resolve(values: dict[str, Any], loc: Location | None) -> tuple[dict[str, Any], int]:
-    """Refraction needs a substrate light can cross: no absorption and no diffuse base."""
+    """Refraction needs a substrate light can cross: no absorption and no diffuse base. A stack
+    (see :mod:`renderer.materials.stack`) replaces eta_film and derives its total thickness."""
     if values.get("transmission") and (values.get("k_inner", 0.0) > 0.0 or "reflectance" in values):
         raise SceneError('thinfilm: "transmission" needs a clear substrate (no "k_inner", no "reflectance")', loc)
-    return values, 0
+    return resolve_stack(values, loc), 0
+
+
+def layer_rows(values: dict[str, Any], loc: Location | None) -> np.ndarray:
+    """This material's rows of the scene's layer table (none without a stack)."""
+    return stack_rows(values, loc)
 
 
 @wp.func
@@ -79,7 +92,17 @@ def film_reflect_transmit(b: BSDF, w: wp.vec3):
     cos0 = wp.abs(w[2])
     r = wp.vec3(0.0)
     t = wp.vec3(0.0)
-    if b.spectral_n > 0:
+    if b.layer_count > 0:
+        # a stack: d is its mapped total thickness, which scales every layer alike
+        total = b.p[SLOT.thickness][0]
+        scale = wp.where(total > 0.0, d / total, 1.0)
+        back = w[2] < 0.0 and _transmissive(b)
+        if b.spectral_n > 0:
+            r, t = multilayer_rgb_sampled(cos0, n0, n2, b.layers, b.layer_first, b.layer_count, back, scale,
+                                          b.spectral_n, b.wavelength_u, b.spectral)
+        else:
+            r, t = multilayer_rgb3(cos0, n0, n2, b.layers, b.layer_first, b.layer_count, back, scale)
+    elif b.spectral_n > 0:
         r, t = thin_film_rgb_sampled(cos0, n0, n1, n2, d, b.spectral_n, b.wavelength_u, b.spectral)
     else:
         r, t = thin_film_rgb3(cos0, n0, n1, n2, d)
