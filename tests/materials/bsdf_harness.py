@@ -45,7 +45,9 @@ def _unit(wo) -> wp.vec3:
 
 
 @wp.func
-def _bsdf(p: Slots, flags: int, kind: int, layers: wp.array(dtype=wp.vec4), first: int, count: int) -> BSDF:
+def bsdf_from_rows(p: Slots, flags: int, kind: int, layers: wp.array(dtype=wp.vec4), first: int,
+                   count: int) -> BSDF:
+    """A BSDF as load_bsdf fills it, from constant slot rows and a layer table (rgb3: no spectral table)."""
     b = BSDF()
     b.kind = kind
     b.p = p
@@ -65,7 +67,7 @@ def _kernel(name: str):
               count: int, wo: wp.vec3, seed: int, out: wp.array(dtype=wp.vec3, ndim=2)):
         i = wp.tid()
         rng = wp.rand_init(seed, i)
-        b = _bsdf(p, flags, kind, layers, first, count)
+        b = bsdf_from_rows(p, flags, kind, layers, first, count)
         # uniform-sphere estimates of the integrals of pdf and of f |cos|
         wi = uniform_sphere(wp.vec2(wp.randf(rng), wp.randf(rng)))
         inv = 4.0 * 3.14159265358979
@@ -112,7 +114,7 @@ def _chi2_kernels(name: str):
               count: int, wo: wp.vec3, seed: int, out: wp.array(dtype=wp.vec4)):
         i = wp.tid()
         rng = wp.rand_init(seed, i)
-        b = _bsdf(p, flags, kind, layers, first, count)
+        b = bsdf_from_rows(p, flags, kind, layers, first, count)
         s = wp.static(mod.sample)(b, wo, wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)))
         ok = 0.0
         if s.pdf > 0.0 and (s.flags & SPECULAR) == 0:
@@ -124,7 +126,7 @@ def _chi2_kernels(name: str):
               count: int, wo: wp.vec3, dirs: wp.array(dtype=wp.vec3),
                 out: wp.array(dtype=float)):
         i = wp.tid()
-        out[i] = wp.static(mod.eval_pdf)(_bsdf(p, flags, kind, layers, first, count), wo, dirs[i]).pdf
+        out[i] = wp.static(mod.eval_pdf)(bsdf_from_rows(p, flags, kind, layers, first, count), wo, dirs[i]).pdf
 
     return draw, density
 

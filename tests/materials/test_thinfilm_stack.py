@@ -8,14 +8,14 @@ import pytest
 import warp as wp
 
 import renderer
-from bsdf_harness import constant_rows, layer_table
+from bsdf_harness import bsdf_from_rows, constant_rows, layer_table
 from renderer import optics
 from renderer.api import init_warp
 from renderer.color import spectral
 from renderer.color.rgb_weights import RgbWeightTable, make_rgb_weight_table
 from renderer.errors import SceneError
 from renderer.materials import material, thinfilm
-from renderer.materials.bsdf import BSDF, Slots
+from renderer.materials.bsdf import Slots
 from renderer.materials.stack import stack_rows
 
 init_warp()
@@ -28,12 +28,7 @@ TIO2_SIO2 = dict(layer_eta=[2.4, 1.46], layer_thickness=[57.3, 94.2], repeat=4, 
 def _coat(p: Slots, flags: int, layers: wp.array(dtype=wp.vec4), first: int, count: int, table: RgbWeightTable,
           n_lambda: int, u: float, w: wp.array(dtype=wp.vec3), out: wp.array(dtype=wp.vec3, ndim=2)):
     i = wp.tid()
-    b = BSDF()
-    b.p = p
-    b.flags = flags
-    b.layers = layers
-    b.layer_first = first
-    b.layer_count = count
+    b = bsdf_from_rows(p, flags, 0, layers, first, count)
     b.spectral = table
     b.spectral_n = n_lambda
     b.wavelength_u = u
