@@ -212,3 +212,18 @@ def multilayer_rgb(cos_theta, eta, k, thickness_nm, mode: str = "spectral:32", c
                       _layer_array(rows, n0), wp.array(lam.astype(np.float32), dtype=float, device="cpu"),
                       wp.array(weights.astype(np.float32), dtype=wp.vec3, device="cpu"), out], device="cpu")
     return out.numpy().reshape(cos0.shape + (3,))
+
+
+def multilayer_rgb_jittered(cos_theta, eta, k, thickness_nm, u_jitter, n_samples: int, cauchy_b=None,
+                            table: RgbWeightTable | None = None) -> np.ndarray:
+    """One evaluation of the renderer's stack estimator :func:`multilayer_rgb_sampled` per element
+    of the broadcast (cos_theta, u_jitter): linear-sRGB reflectance (..., 3). For benchmarks."""
+    n0, n_sub, rows = stack_layers(eta, k, thickness_nm, cauchy_b)
+    cos0, u = np.broadcast_arrays(np.asarray(cos_theta, np.float64), np.asarray(u_jitter, np.float64))
+    flat = [wp.array(np.ascontiguousarray(a, np.float32).ravel(), dtype=float, device="cpu") for a in (cos0, u)]
+    table = table if table is not None else make_rgb_weight_table("cpu")
+    out = wp.empty(flat[0].shape[0], dtype=wp.vec3, device="cpu")
+    wp.launch(_stack_rgb_sampled_kernel, dim=out.shape[0],
+              inputs=[flat[0], n0, wp.vec2(*n_sub), _layer_array(rows, n0), flat[1], int(n_samples), table, out],
+              device="cpu")
+    return out.numpy().reshape(cos0.shape + (3,))
