@@ -143,8 +143,8 @@ def test_500_layers_stay_finite_and_physical():
     cases = {
         "nacre-like": (np.r_[1.0, np.tile([1.6, 1.43], n_layers // 2), 1.6], np.zeros(n_layers + 2),
                        rng.uniform(300.0, 500.0, n_layers)),
-        "thick absorbing": (np.r_[1.0, rng.uniform(1.0, 3.0, n_layers), 0.2], np.r_[0.0, rng.uniform(0, 5, n_layers), 4.0],
-                            rng.uniform(500.0, 5000.0, n_layers)),
+        "thick absorbing": (np.r_[1.0, rng.uniform(1.0, 3.0, n_layers), 0.2],
+                            np.r_[0.0, rng.uniform(0, 5, n_layers), 4.0], rng.uniform(500.0, 5000.0, n_layers)),
         "evanescent from a dense medium": (np.r_[2.5, rng.uniform(1.0, 1.3, n_layers), 1.0], np.zeros(n_layers + 2),
                                            rng.uniform(100.0, 3000.0, n_layers)),
     }
