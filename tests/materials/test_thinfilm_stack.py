@@ -183,3 +183,12 @@ Shape "sphere" "float radius" [1]
     # a lossless coated glass sphere in a white furnace stays white in either mode
     for img in images.values():
         assert abs(float(img.mean()) - 1.0) < 0.05
+
+
+def test_stack_parameter_of_the_wrong_type_names_its_line(tmp_path):
+    scene = tmp_path / "bad.pbrt"
+    scene.write_text('WorldBegin\nMaterial "thinfilm" "float layer_eta" [1.5]\n'
+                     '    "integer layer_thickness" [100]\nShape "sphere"\n')
+    with pytest.raises(SceneError, match="layer_thickness") as info:
+        renderer.load_scene(scene)
+    assert info.value.loc is not None and info.value.loc.line in (2, 3)
