@@ -7,10 +7,17 @@ estimator, one evaluation (the noise a single sample carries) and the mean of 64
 converges to). Cost: the best of four Warp CPU launches of the mode's kernel over 2^20 evaluations
 (2^14 for the reference) on one thread, inputs already on the device.
 
-    WARP_CACHE_PATH=.warp-cache .venv/bin/python benchmarks/thin_film_modes.py
+Stacks (``--stacks``): the same modes for multilayer stacks of 1, 10, 100 and 200 layers, two
+families: quarter-wave TiO2/SiO2 mirrors (2.4 | 1.46 on glass, design wavelengths 420–680 nm) and
+nacre-like stacks (aragonite 1.60, 400 nm ± 20 % | organic matrix 1.43, 30 nm, on matrix, 16
+seeds); ΔE00 against the 1 nm reference (monochromatic) and the cost of one RGB evaluation of each
+mode (Warp CPU kernel, one thread).
+
+    WARP_CACHE_PATH=.warp-cache .venv/bin/python benchmarks/thin_film_modes.py [--stacks]
 """
 from __future__ import annotations
 
+import sys
 import time
 from functools import lru_cache
 
@@ -48,6 +55,17 @@ def grid(film: tuple[float, float, float]):
     return COS_THETA[:, None], n0, n1, n2, THICKNESS_NM[None, :]
 
 
+def _time(kernel, m: int, args: list) -> float:
+    """Nanoseconds per thread of a kernel: the best of four CPU launches."""
+    best = np.inf
+    for _ in range(4):
+        start = time.perf_counter()
+        wp.launch(kernel, dim=m, inputs=args, device="cpu")
+        wp.synchronize_device("cpu")
+        best = min(best, time.perf_counter() - start)
+    return best / m * 1e9
+
+
 @lru_cache(maxsize=None)
 def cost_ns(mode: str) -> float:
     """Nanoseconds per RGB evaluation of a mode: the Warp CPU kernel alone (one thread), inputs prepared."""
@@ -67,16 +85,86 @@ def cost_ns(mode: str) -> float:
         kernel, args = optics._rgb_quadrature_kernel, [
             *inputs, wp.array(lam.astype(np.float32), dtype=float, device="cpu"),
             wp.array(weights.astype(np.float32), dtype=wp.vec3, device="cpu"), float(band), out]
-    best = np.inf
-    for _ in range(4):
-        start = time.perf_counter()
-        wp.launch(kernel, dim=m, inputs=args, device="cpu")
-        wp.synchronize_device("cpu")
-        best = min(best, time.perf_counter() - start)
-    return best / m * 1e9
+    return _time(kernel, m, args)
+
+
+STACK_LAYERS = (1, 10, 100, 200)
+STACK_VARIANTS = 16
+
+
+def stack(family: str, n_layers: int, variant: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(eta, k, thickness) of one stack of a family (see the module docstring)."""
+    if family == "mirror":
+        lam0 = 420.0 + 260.0 * variant / (STACK_VARIANTS - 1)
+        inner = np.resize([2.4, 1.46], n_layers)
+        return np.r_[1.0, inner, 1.52], np.zeros(n_layers + 2), lam0 / (4.0 * inner)
+    rng = np.random.default_rng(variant)
+    inner = np.resize([1.60, 1.43], n_layers)
+    d = np.resize([400.0, 30.0], n_layers) * np.maximum(1.0 + np.resize([0.2, 0.0], n_layers)
+                                                        * rng.standard_normal(n_layers), 0.0)
+    return np.r_[1.0, inner, 1.43], np.zeros(n_layers + 2), d
+
+
+@lru_cache(maxsize=None)
+def stack_cost_ns(mode: str, n_layers: int) -> float:
+    """Nanoseconds per RGB evaluation of a stack in a mode (Warp CPU kernel, one thread)."""
+    n0, n_sub, rows = optics.stack_layers(*stack("nacre", n_layers, 0))
+    n_lambda = 3 if mode == "rgb3" else 471 if mode == "reference" else int(mode.split(":")[1])
+    m = max(64, (1 << 23) // (n_layers * n_lambda))
+    rng = np.random.default_rng(0)
+    cos0 = wp.array(rng.uniform(0.0, 1.0, m).astype(np.float32), dtype=float, device="cpu")
+    layers = wp.array(rows, dtype=wp.vec4, device="cpu")
+    out = wp.empty(m, dtype=wp.vec3, device="cpu")
+    if mode.startswith("jittered:"):
+        u = wp.array(rng.random(m).astype(np.float32), dtype=float, device="cpu")
+        return _time(optics._stack_rgb_sampled_kernel, m, [cos0, n0, wp.vec2(*n_sub), layers, u, n_lambda,
+                                                            make_rgb_weight_table("cpu"), out])
+    lam, weights, _ = spectral.mode_wavelengths(mode)
+    return _time(optics._stack_rgb_quadrature_kernel, m, [
+        cos0, n0, wp.vec2(*n_sub), layers, wp.array(lam.astype(np.float32), dtype=float, device="cpu"),
+        wp.array(weights.astype(np.float32), dtype=wp.vec3, device="cpu"), out])
+
+
+def stack_errors(family: str, n_layers: int) -> dict[str, np.ndarray]:
+    """ΔE00 of each mode against the reference over the family's variants and COS_THETA."""
+    errors: dict[str, list[np.ndarray]] = {}
+    rng = np.random.default_rng(2)
+    for v in range(STACK_VARIANTS):
+        eta, k, d = stack(family, n_layers, v)
+        ref = optics.multilayer_rgb(COS_THETA, eta, k, d, mode="reference")
+        for mode in MODES:
+            errors.setdefault(mode, []).append(delta_e(optics.multilayer_rgb(COS_THETA, eta, k, d, mode=mode), ref))
+        for n in (8, 32):
+            r = optics.multilayer_rgb_jittered(COS_THETA[None, :], eta, k, d, rng.random((MEAN_OF, len(COS_THETA))), n)
+            errors.setdefault(f"jittered:{n} (1 sample)", []).append(delta_e(r[0], ref))
+            errors.setdefault(f"jittered:{n} (mean of {MEAN_OF})", []).append(delta_e(r.mean(axis=0), ref))
+    return {m: np.concatenate(e) for m, e in errors.items()}
+
+
+def main_stacks() -> None:
+    wp.config.quiet = True
+    wp.init()
+    print(f"Stack colour error against the 1 nm reference (ΔE00 mean / max over {STACK_VARIANTS} stacks × cos θ ∈ "
+          f"{COS_THETA.tolist()}) and cost per RGB evaluation (µs, Warp CPU device, one thread).\n")
+    head = " | ".join(f"{n} layers" for n in STACK_LAYERS)
+    print(f"| mode | mirror ΔE00: {head} | nacre ΔE00: {head} | µs / evaluation: {head} |")
+    print("|---|" + "---:|" * (3 * len(STACK_LAYERS)))
+    table = {f: {n: stack_errors(f, n) for n in STACK_LAYERS} for f in ("mirror", "nacre")}
+    for name in list(table["mirror"][1]) + ["reference"]:
+        mode = name.split(" ")[0]
+        cells = []
+        for f in ("mirror", "nacre"):
+            for n in STACK_LAYERS:
+                e = table[f][n].get(name)
+                cells.append("0" if e is None else f"{e.mean():.2f} / {e.max():.1f}")
+        cost = [f"{stack_cost_ns(mode, n) / 1000:,.2f}" for n in STACK_LAYERS]
+        print(f"| {name} | " + " | ".join(cells + cost) + " |")
 
 
 def main() -> None:
+    if "--stacks" in sys.argv[1:]:
+        main_stacks()
+        return
     wp.config.quiet = True
     wp.init()
     rows: dict[str, list[np.ndarray]] = {}

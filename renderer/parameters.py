@@ -21,9 +21,10 @@ if TYPE_CHECKING:   # only annotations: importing the scene package here would m
     from renderer.scene.params import ParamSet
 
 #: Parameter types: "float" and "rgb" may be textures and get a device slot; "bool" gets a flag
-#: bit; "int", "string" and "point3" (a position, e.g. a light's "from") are host-side only (they
-#: shape the table, not the per-hit value).
-TYPES = ("float", "rgb", "bool", "int", "string", "point3")
+#: bit; "int", "string", "point3" (a position, e.g. a light's "from") and "floats" (a list of any
+#: length, e.g. a stack's per-layer values) are host-side only (they shape the table, not the
+#: per-hit value).
+TYPES = ("float", "rgb", "bool", "int", "string", "point3", "floats")
 
 
 @dataclass(frozen=True)
@@ -71,6 +72,10 @@ class Parameter:
             if a.size not in (1, 3):
                 raise SceneError(f'{owner}: parameter "{self.name}" needs 1 or 3 values, got {a.size}', loc)
             a = np.broadcast_to(a.ravel(), (3,)) if a.size == 1 else a.ravel()
+        elif self.type == "floats":
+            if a.size == 0:
+                raise SceneError(f'{owner}: parameter "{self.name}" needs at least one value', loc)
+            a = a.ravel()
         elif self.type == "point3":
             if a.size != 3:
                 raise SceneError(f'{owner}: parameter "{self.name}" needs 3 values (one point), got {a.size}', loc)
@@ -87,7 +92,7 @@ class Parameter:
             if float(a.ravel()[0]) != math.floor(float(a.ravel()[0])):
                 raise SceneError(f'{owner}: parameter "{self.name}" must be an integer, got {value!r}', loc)
             return int(a.ravel()[0])
-        return tuple(float(x) for x in a) if self.type in ("rgb", "point3") else float(a.ravel()[0])
+        return tuple(float(x) for x in a) if self.type in ("rgb", "point3", "floats") else float(a.ravel()[0])
 
     def read(self, ps: ParamSet, owner: str) -> Any:
         """This parameter's value from a pbrt parameter list, or None when it is absent."""
@@ -109,6 +114,8 @@ class Parameter:
             v = ps.int(self.name)
         elif self.type == "point3":
             v = ps.floats(self.name, ("point3", "point"))
+        elif self.type == "floats":
+            v = ps.floats(self.name)
         else:
             v = ps.string(self.name)
         return self.check(v, owner, loc)

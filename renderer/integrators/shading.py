@@ -42,6 +42,9 @@ def load_bsdf(mat: Materials, tex: Textures, spectral: RgbWeightTable, spectral_
     b.flags = mat.flags[m]
     b.spectral = spectral
     b.spectral_n = spectral_n
+    b.layers = mat.layers
+    b.layer_first = mat.layer_first[m]
+    b.layer_count = mat.layer_count[m]
     return b
 
 

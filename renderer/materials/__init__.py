@@ -3,7 +3,8 @@
 A material is a module with ``NAME``, ``PARAMS`` (its named parameters, pbrt-v4's names and
 defaults: :class:`renderer.parameters.Parameters`), the Warp functions ``eval_pdf`` and ``sample``
 (see :mod:`renderer.materials.bsdf`) and, where some values derive from others, an optional
-``resolve(values, loc) -> (values, extra flag bits)``. Registering the module in ``REGISTRY`` is
+``resolve(values, loc) -> (values, extra flag bits)``, and where it has per-layer data, an optional
+``layer_rows(values, loc) -> (n, 4) array`` for the scene's layer table. Registering the module in ``REGISTRY`` is
 all it takes to add one: parsing, validation, the device layout and the docs table follow from
 ``PARAMS``, and kernels are specialised to the materials a scene uses.
 """
@@ -103,6 +104,9 @@ class Materials:
     slots: wp.array2d(dtype=int)        # (n_materials, MAX_SLOTS) texture ids, -1 unused
     flags: wp.array(dtype=int)          # bool parameters (one bit each) and derived bits
     bump: wp.array(dtype=int)           # float displacement texture id, -1 for none
+    layers: wp.array(dtype=wp.vec4)     # every material's layer rows (renderer.materials.stack; 1 dummy row if none)
+    layer_first: wp.array(dtype=int)    # a material's first row in layers
+    layer_count: wp.array(dtype=int)    # and its number of rows (0: no stack)
 
 
 def device_layout(desc: MaterialDesc) -> tuple[list[tuple[Parameter, Any]], int]:
@@ -134,7 +138,17 @@ def build_materials(descs: list[MaterialDesc], textures: dict[str, TextureDesc],
     slot_ids = -np.ones((n, MAX_SLOTS), dtype=np.int32)
     flags = np.zeros(n, dtype=np.int32)
     bump = -np.ones(n, dtype=np.int32)
+    first = np.zeros(n, dtype=np.int32)
+    count = np.zeros(n, dtype=np.int32)
+    rows = [np.zeros((1, 4), np.float32)]
+    n_rows = 1
     for i, d in enumerate(descs):
+        rows_of = getattr(module_of(d.kind, d.loc), "layer_rows", None)
+        if rows_of is not None:
+            mine = rows_of(resolve(d)[0], d.loc)
+            first[i], count[i] = n_rows, len(mine)
+            rows.append(mine)
+            n_rows += len(mine)
         layout, flags[i] = device_layout(d)
         for j, (p, v) in enumerate(layout):
             slot_ids[i, j] = _texture_id(p, v, table, textures, d.loc)
@@ -145,4 +159,7 @@ def build_materials(descs: list[MaterialDesc], textures: dict[str, TextureDesc],
     M.slots = wp.array(slot_ids, dtype=int, device=device)
     M.flags = wp.array(flags, dtype=int, device=device)
     M.bump = wp.array(bump, dtype=int, device=device)
-    return M, [M.kind, M.slots, M.flags, M.bump], {d.kind for d in descs}
+    M.layers = wp.array(np.concatenate(rows), dtype=wp.vec4, device=device)
+    M.layer_first = wp.array(first, dtype=int, device=device)
+    M.layer_count = wp.array(count, dtype=int, device=device)
+    return M, [M.kind, M.slots, M.flags, M.bump, M.layers, M.layer_first, M.layer_count], {d.kind for d in descs}

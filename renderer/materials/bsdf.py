@@ -39,6 +39,9 @@ class BSDF:
     wavelength_u: float     # a per-sample random number for materials that sample wavelengths
     spectral: RgbWeightTable  # spectrum → RGB weights for those materials (the scene's, see device.scene)
     spectral_n: int         # wavelengths per evaluation; 0: the seed's three (rgb3)
+    layers: wp.array(dtype=wp.vec4)  # the scene's layer table (renderer.materials.stack)
+    layer_first: int        # this material's first row in it
+    layer_count: int        # and its number of rows; 0: no stack
 
 
 @wp.struct

@@ -11,7 +11,7 @@ from renderer.errors import Location
 from renderer.materials.bsdf import (BSDF, GLOSSY, REFLECTION, SPECULAR, TRANSMISSION, BSDFEval, BSDFSample,
                                      delta_sample, failed_sample, reflect_z, refract, sampled)
 from renderer.materials.microfacet import (ROUGHNESS_PARAMS, ggx_D, ggx_G, ggx_sample_visible, ggx_visible_pdf,
-                                           is_smooth, resolve_roughness, roughness_to_alpha)
+                                           half_vector, is_smooth, resolve_roughness, roughness_to_alpha)
 from renderer.optics.fresnel import fresnel_dielectric
 from renderer.parameters import Parameter, Parameters
 
@@ -32,25 +32,6 @@ def resolve(values: dict[str, Any], loc: Location | None) -> tuple[dict[str, Any
 def _alpha(b: BSDF) -> wp.vec2:
     return roughness_to_alpha(wp.vec2(b.p[SLOT.uroughness][0], b.p[SLOT.vroughness][0]),
                               (b.flags & FLAG.remaproughness) != 0)
-
-
-@wp.func
-def _half_vector(wo: wp.vec3, wi: wp.vec3, eta: float) -> wp.vec4:
-    """Generalised half vector (xyz, on the +z side) and eta' (w); w = 0 when undefined."""
-    co = wo[2]
-    ci = wi[2]
-    etap = 1.0
-    if co * ci <= 0.0:
-        etap = wp.where(co > 0.0, eta, 1.0 / eta)
-    wm = wi * etap + wo
-    if ci == 0.0 or co == 0.0 or wp.length_sq(wm) == 0.0:
-        return wp.vec4(0.0)
-    wm = wp.normalize(wm)
-    if wm[2] < 0.0:
-        wm = -wm
-    if wp.dot(wm, wi) * ci < 0.0 or wp.dot(wm, wo) * co < 0.0:
-        return wp.vec4(0.0)
-    return wp.vec4(wm[0], wm[1], wm[2], etap)
 
 
 @wp.func
@@ -78,7 +59,7 @@ def dielectric_eval(eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3, sides:
     e = BSDFEval()
     if eta == 1.0 or is_smooth(alpha):
         return e
-    h = _half_vector(wo, wi, eta)
+    h = half_vector(wo, wi, eta)
     if h[3] == 0.0:
         return e
     wm = wp.vec3(h[0], h[1], h[2])

@@ -98,6 +98,26 @@ def ggx_sample_visible(w: wp.vec3, alpha: wp.vec2, u: wp.vec2) -> wp.vec3:
 
 
 @wp.func
+def half_vector(wo: wp.vec3, wi: wp.vec3, eta: float) -> wp.vec4:
+    """Generalised half vector of a reflection or refraction (xyz, on the +z side) and eta' (w), for
+    eta = inside over outside index; w = 0 when undefined (a side mismatch or a degenerate pair)."""
+    co = wo[2]
+    ci = wi[2]
+    etap = 1.0
+    if co * ci <= 0.0:
+        etap = wp.where(co > 0.0, eta, 1.0 / eta)
+    wm = wi * etap + wo
+    if ci == 0.0 or co == 0.0 or wp.length_sq(wm) == 0.0:
+        return wp.vec4(0.0)
+    wm = wp.normalize(wm)
+    if wm[2] < 0.0:
+        wm = -wm
+    if wp.dot(wm, wi) * ci < 0.0 or wp.dot(wm, wo) * co < 0.0:
+        return wp.vec4(0.0)
+    return wp.vec4(wm[0], wm[1], wm[2], etap)
+
+
+@wp.func
 def is_smooth(alpha: wp.vec2) -> bool:
     """Below this roughness the lobe is treated as a perfect mirror (as pbrt does)."""
     return wp.max(alpha[0], alpha[1]) < 1.0e-3

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 import warp as wp
 
-from renderer.materials import REGISTRY, device_layout, kind_id, material
+from renderer.materials import REGISTRY, device_layout, kind_id, material, resolve
 from renderer.materials.bsdf import BSDF, MAX_SLOTS, SPECULAR, Slots
 from renderer.sampling.warps import uniform_sphere
 
@@ -24,9 +24,19 @@ def constant_rows(name: str, values: dict[str, Any]) -> tuple[np.ndarray, int]:
     return rows, flags
 
 
+def layer_table(name: str, values: dict[str, Any]) -> tuple[wp.array, int, int]:
+    """The layer table of a scene holding only this material: (rows, first, count), as the upload
+    lays it out (a dummy row 0, then the material's rows; count 0 without a stack)."""
+    desc = material(name, **values)
+    rows_of = getattr(REGISTRY[name], "layer_rows", None)
+    mine = rows_of(resolve(desc)[0], None) if rows_of is not None else np.zeros((0, 4), np.float32)
+    rows = np.concatenate([np.zeros((1, 4), np.float32), mine])
+    return wp.array(rows, dtype=wp.vec4, device="cpu"), 1, len(mine)
+
+
 def _bsdf_inputs(name: str, values: dict[str, Any]) -> list:
     rows, flags = constant_rows(name, values)
-    return [Slots(*rows.ravel().tolist()), int(flags), kind_id(name)]
+    return [Slots(*rows.ravel().tolist()), int(flags), kind_id(name), *layer_table(name, values)]
 
 
 def _unit(wo) -> wp.vec3:
@@ -35,11 +45,16 @@ def _unit(wo) -> wp.vec3:
 
 
 @wp.func
-def _bsdf(p: Slots, flags: int, kind: int) -> BSDF:
+def bsdf_from_rows(p: Slots, flags: int, kind: int, layers: wp.array(dtype=wp.vec4), first: int,
+                   count: int) -> BSDF:
+    """A BSDF as load_bsdf fills it, from constant slot rows and a layer table (rgb3: no spectral table)."""
     b = BSDF()
     b.kind = kind
     b.p = p
     b.flags = flags
+    b.layers = layers
+    b.layer_first = first
+    b.layer_count = count
     return b
 
 
@@ -48,10 +63,11 @@ def _kernel(name: str):
     mod = REGISTRY[name]
 
     @wp.kernel(module="unique")
-    def check(p: Slots, flags: int, kind: int, wo: wp.vec3, seed: int, out: wp.array(dtype=wp.vec3, ndim=2)):
+    def check(p: Slots, flags: int, kind: int, layers: wp.array(dtype=wp.vec4), first: int,
+              count: int, wo: wp.vec3, seed: int, out: wp.array(dtype=wp.vec3, ndim=2)):
         i = wp.tid()
         rng = wp.rand_init(seed, i)
-        b = _bsdf(p, flags, kind)
+        b = bsdf_from_rows(p, flags, kind, layers, first, count)
         # uniform-sphere estimates of the integrals of pdf and of f |cos|
         wi = uniform_sphere(wp.vec2(wp.randf(rng), wp.randf(rng)))
         inv = 4.0 * 3.14159265358979
@@ -98,10 +114,11 @@ def _chi2_kernels(name: str):
     mod = REGISTRY[name]
 
     @wp.kernel(module="unique")
-    def draw(p: Slots, flags: int, kind: int, wo: wp.vec3, seed: int, out: wp.array(dtype=wp.vec4)):
+    def draw(p: Slots, flags: int, kind: int, layers: wp.array(dtype=wp.vec4), first: int,
+              count: int, wo: wp.vec3, seed: int, out: wp.array(dtype=wp.vec4)):
         i = wp.tid()
         rng = wp.rand_init(seed, i)
-        b = _bsdf(p, flags, kind)
+        b = bsdf_from_rows(p, flags, kind, layers, first, count)
         s = wp.static(mod.sample)(b, wo, wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)))
         ok = 0.0
         if s.pdf > 0.0 and (s.flags & SPECULAR) == 0:
@@ -109,10 +126,11 @@ def _chi2_kernels(name: str):
         out[i] = wp.vec4(s.wi[0], s.wi[1], s.wi[2], ok)
 
     @wp.kernel(module="unique")
-    def density(p: Slots, flags: int, kind: int, wo: wp.vec3, dirs: wp.array(dtype=wp.vec3),
+    def density(p: Slots, flags: int, kind: int, layers: wp.array(dtype=wp.vec4), first: int,
+              count: int, wo: wp.vec3, dirs: wp.array(dtype=wp.vec3),
                 out: wp.array(dtype=float)):
         i = wp.tid()
-        out[i] = wp.static(mod.eval_pdf)(_bsdf(p, flags, kind), wo, dirs[i]).pdf
+        out[i] = wp.static(mod.eval_pdf)(bsdf_from_rows(p, flags, kind, layers, first, count), wo, dirs[i]).pdf
 
     return draw, density
 
