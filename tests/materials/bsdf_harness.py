@@ -176,10 +176,11 @@ def _mean_f_kernel(name: str):
     mod = REGISTRY[name]
 
     @wp.kernel(module="unique")
-    def mean_f(p: Slots, flags: int, kind: int, wo: wp.array(dtype=wp.vec3), wi: wp.array(dtype=wp.vec3),
-               seed: int, out: wp.array(dtype=wp.vec3, ndim=2)):
+    def mean_f(p: Slots, flags: int, kind: int, layers: wp.array(dtype=wp.vec4), first: int, count: int,
+               wo: wp.array(dtype=wp.vec3), wi: wp.array(dtype=wp.vec3), seed: int,
+               out: wp.array(dtype=wp.vec3, ndim=2)):
         i, j = wp.tid()
-        b = _bsdf(p, flags, kind)
+        b = bsdf_from_rows(p, flags, kind, layers, first, count)
         rng = wp.rand_init(seed, i * 65536 + j)
         b.wavelength_u = wp.randf(rng)
         out[i, j] = wp.static(mod.eval_pdf)(b, wo[i], wi[i]).f
@@ -204,10 +205,11 @@ def _cell_kernel(name: str):
     mod = REGISTRY[name]
 
     @wp.kernel(module="unique")
-    def cells(p: Slots, flags: int, kind: int, wo: wp.vec3, seed: int, out: wp.array(dtype=wp.vec4, ndim=2)):
+    def cells(p: Slots, flags: int, kind: int, layers: wp.array(dtype=wp.vec4), first: int, count: int,
+              wo: wp.vec3, seed: int, out: wp.array(dtype=wp.vec4, ndim=2)):
         i = wp.tid()
         rng = wp.rand_init(seed, i)
-        b = _bsdf(p, flags, kind)
+        b = bsdf_from_rows(p, flags, kind, layers, first, count)
         b.wavelength_u = wp.randf(rng)
         s = wp.static(mod.sample)(b, wo, wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)))
         v = float(0.0)
