@@ -12,7 +12,7 @@ from typing import Any, Callable
 import numpy as np
 
 from renderer.cluster.worker import Job, Part, render_range
-from renderer.device.film import add_sums, image_from_sums
+from renderer.device.film import add_into, image_from_sums
 from renderer.errors import RenderError
 from renderer.film_state import FilmState
 from renderer.sample_ranges import add_range, count, missing
@@ -44,17 +44,24 @@ class Cluster:
 
 @dataclass
 class HostFilm:
-    """The merged film on the driver: fixed-point sums of the finished ranges."""
+    """The merged film on the driver: fixed-point sums of the finished ranges, (N, 3) int64 each
+    (whole and fraction apart and contiguous: merging in place then costs ~50 ms at 1080x1920)."""
 
     width: int
     height: int
-    sums: np.ndarray
+    whole: np.ndarray
+    fraction: np.ndarray
     spp: int = 0
     bad: int = 0
     rays: float = 0.0
 
+    @property
+    def sums(self) -> np.ndarray:
+        """(N, 3, 2) as checkpoints hold them."""
+        return np.stack([self.whole, self.fraction], axis=-1)
+
     def image(self) -> np.ndarray:
-        return image_from_sums(self.sums, self.width, self.height, self.spp)
+        return image_from_sums(self.whole, self.fraction, self.width, self.height, self.spp)
 
 
 @dataclass
@@ -75,7 +82,7 @@ class ClusterRender:
         self.scene, self.settings, self.cluster = scene, settings, cluster
         self.fingerprint = scene_fingerprint(scene)
         W, H = settings.width, settings.height
-        self.film = HostFilm(W, H, np.zeros((W * H, 3, 2), dtype=np.int64))
+        self.film = HostFilm(W, H, np.zeros((W * H, 3), dtype=np.int64), np.zeros((W * H, 3), dtype=np.int64))
         self.ranges: list[tuple[int, int]] = []
         self.stats = RenderStats(width=W, height=H, warnings=list(dict.fromkeys(scene.warnings)))
         self.workers: dict[str, WorkerStats] = {}
@@ -89,6 +96,9 @@ class ClusterRender:
         """Tasks the cluster can run at once."""
         res = self.ray.cluster_resources()
         if self.cluster.task_gpus > 0:
+            if res.get("GPU", 0) < self.cluster.task_gpus:   # Ray would keep such tasks pending for ever
+                raise RenderError(f"tasks asking for {self.cluster.task_gpus:g} GPU each, but the Ray cluster has "
+                                  f"{res.get('GPU', 0):g} GPUs (render on its CPUs with --device cpu)")
             return max(1, int(res.get("GPU", 0) / self.cluster.task_gpus))
         return max(1, int(res.get("CPU", 1) // self.cluster.task_cpus))
 
@@ -128,7 +138,7 @@ class ClusterRender:
     def _merge(self, part: Part) -> None:
         f = self.film
         self.ranges = add_range(self.ranges, part.start, part.stop)
-        f.sums = add_sums(f.sums, part.sums)
+        add_into(f.whole, f.fraction, part.whole, part.fraction)
         f.spp, f.bad, f.rays = count(self.ranges), f.bad + part.bad, f.rays + part.rays
         w = self.workers.setdefault(part.worker, WorkerStats())
         w.samples += (part.stop - part.start) * f.width * f.height
@@ -194,6 +204,7 @@ class ClusterRender:
     def restore(self, state: dict[str, np.ndarray], source: str = "checkpoint") -> None:
         f = self.film
         film = FilmState.from_state(state, self.fingerprint, self.settings, f.width * f.height, source)
-        f.sums, f.spp, f.bad, f.rays = film.sums, film.spp, film.bad, film.rays
+        f.whole, f.fraction = np.ascontiguousarray(film.sums[..., 0]), np.ascontiguousarray(film.sums[..., 1])
+        f.spp, f.bad, f.rays = film.spp, film.bad, film.rays
         self.ranges, self.stats.seconds = film.ranges, film.seconds
         self._update_stats(film.seconds)

@@ -40,7 +40,8 @@ class Part:
 
     start: int
     stop: int
-    sums: np.ndarray               # (N, 3, 2) int64, see renderer.device.film
+    whole: np.ndarray              # (N, 3) int64: the fixed-point sums, see renderer.device.film
+    fraction: np.ndarray           # (N, 3) int64
     bad: int
     rays: float
     seconds: float                 # rendering only (upload and kernel load excluded)
@@ -86,5 +87,6 @@ def render_range(job: Job, start: int, stop: int) -> Part:
     session.run_samples(range(start, stop))
     if session.film.spp != stop - start:      # Ctrl-C reached the worker: never hand back a partial range
         raise KeyboardInterrupt
-    return Part(start, stop, session.film.sums(), session.film.bad_samples, session.film.ray_count,
+    film = session.film
+    return Part(start, stop, film.whole.numpy(), film.fraction.numpy(), film.bad_samples, film.ray_count,
                 time.perf_counter() - t0, setup, f"{socket.gethostname()}:{os.getpid()}")

@@ -55,11 +55,13 @@ def accumulate(sample: wp.array(dtype=wp.vec3d), whole: wp.array2d(dtype=wp.int6
         whole[i, c] = whole[i, c] + wp.int64(w) + carry
 
 
-def add_sums(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The sum of two films' fixed-point sums ((N, 3, 2) int64: whole, fraction); exact."""
-    frac = a[..., 1] + b[..., 1]
-    carry = frac >> FRACTION_BITS
-    return np.stack([a[..., 0] + b[..., 0] + carry, frac & (ONE - 1)], axis=-1)
+def add_into(whole: np.ndarray, fraction: np.ndarray, part_whole: np.ndarray, part_fraction: np.ndarray) -> None:
+    """Add one film's fixed-point sums into another's, in place and exactly (each fraction sum is
+    below 2^62, so their sum fits int64 before the carry moves into the whole part)."""
+    fraction += part_fraction
+    whole += part_whole
+    whole += fraction >> FRACTION_BITS
+    fraction &= ONE - 1
 
 
 def fixed_from_float(s: np.ndarray) -> np.ndarray:
@@ -68,9 +70,9 @@ def fixed_from_float(s: np.ndarray) -> np.ndarray:
     return np.stack([whole.astype(np.int64), ((s - whole) * float(ONE)).astype(np.int64)], axis=-1)
 
 
-def image_from_sums(sums: np.ndarray, width: int, height: int, spp: int) -> np.ndarray:
-    """Linear RGB, float32 (H, W, 3): the mean of the samples in ``sums``."""
-    total = sums[..., 0].astype(np.float64) + sums[..., 1].astype(np.float64) / float(ONE)
+def image_from_sums(whole: np.ndarray, fraction: np.ndarray, width: int, height: int, spp: int) -> np.ndarray:
+    """Linear RGB, float32 (H, W, 3): the mean of the samples in the sums."""
+    total = whole.astype(np.float64) + fraction.astype(np.float64) / float(ONE)
     return (total.reshape(height, width, 3) / max(spp, 1)).astype(np.float32)
 
 
@@ -115,7 +117,7 @@ class Film:
 
     def image(self) -> np.ndarray:
         """Linear RGB, float32 (H, W, 3): the mean of all samples taken so far."""
-        return image_from_sums(self.sums(), self.width, self.height, self.spp)
+        return image_from_sums(self.whole.numpy(), self.fraction.numpy(), self.width, self.height, self.spp)
 
     @property
     def bad_samples(self) -> int:
