@@ -110,16 +110,17 @@ class ClusterRender:
     def _chunk(self, left: int) -> int:
         if self.cluster.chunk:
             return self.cluster.chunk
-        done = sum(w.seconds for w in self.workers.values())
-        if not done:
+        seconds = sum(w.seconds for w in self.workers.values())
+        if not seconds:
             return 1
-        spp_per_second = self.film.spp / done            # one task's rate: each task is one worker
+        pixels = self.film.width * self.film.height
+        spp_per_second = sum(w.samples for w in self.workers.values()) / pixels / seconds   # one task's rate
         return max(1, min(round(spp_per_second * TARGET_TASK_SECONDS), math.ceil(left / self.width)))
 
     def _hand_out(self, todo: deque) -> None:
         while todo and self.busy < self.width:
             start, stop = todo.popleft()
-            end = min(stop, start + self._chunk(sum(b - a for a, b in todo) + stop - start))
+            end = min(stop, start + self._chunk(count(list(todo)) + stop - start))
             if end < stop:
                 todo.appendleft((end, stop))
             self.flight[self.task.remote(self.job, start, end)] = (start, end)
