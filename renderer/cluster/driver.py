@@ -154,16 +154,18 @@ class ClusterRender:
     def run(self, spp: int, time_limit: float | None = None, on_pass: Callable[["ClusterRender"], None] | None = None,
             should_stop: Callable[[], bool] | None = None) -> RenderStats:
         """Render the samples below ``spp`` not yet in the film. After ``time_limit`` seconds no
-        more tasks are handed out (those in flight finish); ``should_stop()`` or Ctrl-C cancels
+        more tasks are handed out (those in flight finish; the first round always goes out); ``should_stop()`` or Ctrl-C cancels
         the tasks in flight and keeps the finished ranges. ``on_pass`` runs after each merge."""
         if spp < 1:
             raise RenderError(f"spp must be at least 1, got {spp}")
         todo = deque(missing(self.ranges, spp))
         t0, base = time.perf_counter(), self.stats.seconds
+        first_round = True              # handed out even past the time limit, as a pass is in one process
         try:
             while True:
-                if time_limit is None or time.perf_counter() - t0 < time_limit:
+                if first_round or time_limit is None or time.perf_counter() - t0 < time_limit:
                     self._hand_out(todo)
+                    first_round = False
                 if not self.flight:
                     break
                 ready, _ = self.ray.wait(list(self.flight), num_returns=1, timeout=POLL_SECONDS)

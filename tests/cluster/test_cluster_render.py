@@ -122,6 +122,20 @@ def test_stopped_cluster_render_resumes_with_or_without_the_cluster(local_ray, s
     alone.run(SPP)
     np.testing.assert_array_equal(alone.image(), reference)
     assert alone.stats.rays == again.stats.rays
+    started = RenderSession(scene, settings)       # and a one-process checkpoint continued on the cluster
+    started.run(2)
+    onto = open_cluster(scene, settings, Cluster(workers=2, chunk=3))
+    onto.restore(started.state())
+    onto.run(SPP)
+    np.testing.assert_array_equal(onto.image(), reference)
+
+
+def test_time_limit_stops_handing_out_tasks(local_ray, scene_file):
+    """Past the time limit no task is handed out; the first round (two 1-spp tasks) still runs."""
+    scene = renderer.load_scene(scene_file)
+    render = open_cluster(scene, settings_for(scene), Cluster(workers=2, chunk=1))
+    stats = render.run(100, time_limit=0.0)
+    assert stats.spp == 2 and render.ranges == [(0, 2)] and not stats.interrupted
 
 
 def test_cli_ray_checkpoint_and_resume(local_ray, scene_file, reference, tmp_path, capsys):
