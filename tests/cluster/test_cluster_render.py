@@ -139,12 +139,13 @@ def test_time_limit_stops_handing_out_tasks(local_ray, scene_file):
 
 
 def test_cli_ray_checkpoint_and_resume(local_ray, scene_file, reference, tmp_path, capsys):
-    """``--ray`` with a checkpoint, then ``--resume`` of it to more samples, both via the command."""
+    """``--ray`` with a checkpoint, then ``--resume`` of it to more samples with an AOV layer."""
     out, ck = tmp_path / "out.exr", tmp_path / "ck.npz"
     args = [str(scene_file), "-o", str(out), "--ray", "--ray-workers", "2", "--ray-chunk", "2", "--quiet"]
     assert main([*args, "--spp", "4", "--checkpoint", str(ck)]) == 0
-    assert main([*args, "--spp", str(SPP), "--resume", str(ck)]) == 0
+    assert main([*args, "--spp", str(SPP), "--resume", str(ck), "--aov", "albedo"]) == 0   # AOVs: one local pass
     err = capsys.readouterr().err
     assert "worker " in err and "M samples/s" in err
     chans = read_exr(out)[0]
+    assert 0.0 < chans["albedo.R"].mean() <= 1.0
     np.testing.assert_array_equal(np.stack([chans[c] for c in "RGB"], axis=-1), reference)

@@ -62,6 +62,21 @@ def test_samples_too_large_for_the_sums_are_dropped_and_counted():
     assert film.sums()[4, :, 0].tolist() == [1, 1, 1]
 
 
+def test_an_earlier_versions_float_sums_resume_as_fixed_point():
+    from renderer.film_state import FilmState, settings_key
+    from renderer.settings import RenderSettings
+
+    settings = RenderSettings(width=2, height=1, seed=0, max_depth=1)
+    state = {"sum": np.array([[1.5, 0.25, 3.0], [0.0, 2.0 ** -62, 7.75]]), "spp": np.int64(4),
+             "bad": np.zeros(1), "rays": np.zeros(1), "seconds": np.float64(1.0),
+             "fingerprint": np.str_("f"), "settings": np.str_(settings_key(settings))}
+    film = FilmState.from_state(state, "f", settings, pixels=2)
+    half = 1 << (FRACTION_BITS - 1)
+    assert film.sums[..., 0].tolist() == [[1, 0, 3], [0, 0, 7]]
+    assert film.sums[..., 1].tolist() == [[half, half // 2, 0], [0, 1, 3 * half // 2]]
+    assert film.ranges == [(0, 4)]
+
+
 def test_sample_ranges():
     r = add_range(add_range(add_range([], 4, 6), 0, 2), 2, 4)
     assert r == [(0, 6)]
