@@ -129,10 +129,11 @@ class ClusterRender:
         start, stop = self.flight.pop(ref)
         try:
             return self.ray.get(ref)
-        except self.ray.exceptions.RayTaskError as e:    # the task raised: its message, not Ray's wrapping
-            cause = getattr(e, "cause", None) or e
-            raise RenderError(f"a worker failed on samples {start}..{stop - 1}: {cause}") from None
-        except self.ray.exceptions.RayError as e:        # the worker died more often than TASK_RETRIES
+        except self.ray.exceptions.RayError as e:
+            self._cancel()                               # the render ends here: the other tasks are of no use
+            if isinstance(e, self.ray.exceptions.RayTaskError):    # the task raised: its message, not Ray's
+                raise RenderError(f"a worker failed on samples {start}..{stop - 1}: {getattr(e, 'cause', None) or e}"
+                                  ) from None
             raise RenderError(f"samples {start}..{stop - 1} were lost after {TASK_RETRIES} retries: "
                               f"{str(e).splitlines()[0]}") from None
 

@@ -19,9 +19,10 @@ def scene_files(desc: SceneDescription) -> SceneFiles:
     return {str(p): p.read_bytes() for p in referenced_files(desc)}
 
 
-def localised(desc: SceneDescription, files: SceneFiles, folder: Path) -> SceneDescription:
+def localised(desc: SceneDescription, files: SceneFiles, folder: Path) -> tuple[SceneDescription, dict[str, str]]:
     """A copy of ``desc`` whose textures and environment images read the shipped ``files``,
-    written under ``folder`` (one subfolder per file keeps names and suffixes as they were)."""
+    written under ``folder`` (one subfolder per file keeps names and suffixes as they were), and
+    each written file's original path by its new one (so errors can name the file the user knows)."""
     local: dict[str, str] = {}
     for i, (original, data) in enumerate(files.items()):
         path = folder / str(i) / Path(original).name
@@ -38,4 +39,4 @@ def localised(desc: SceneDescription, files: SceneFiles, folder: Path) -> SceneD
     lights = [dataclasses.replace(light, values={**light.values,
                                                  "filename": local[str(Path(light.values["filename"]).resolve())]})
               if light.values.get("filename") is not None else light for light in desc.lights]
-    return dataclasses.replace(desc, textures=textures, lights=lights)
+    return dataclasses.replace(desc, textures=textures, lights=lights), {v: k for k, v in local.items()}

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from renderer.errors import RenderError
 from renderer.settings import RenderSettings
 
 if TYPE_CHECKING:
@@ -74,7 +75,14 @@ def _session(job: Job) -> tuple["RenderSession", float]:
     t0 = time.perf_counter()
     desc, files = ray.get(job.shipped)
     with tempfile.TemporaryDirectory(prefix="summertime-scene-") as folder:   # read during the upload only
-        session = RenderSession(localised(desc, files, Path(folder)), job.settings, device=device, threads=threads)
+        local, originals = localised(desc, files, Path(folder))
+        try:
+            session = RenderSession(local, job.settings, device=device, threads=threads)
+        except (RenderError, OSError) as e:   # name the driver's files, not this worker's copies
+            message = str(e)
+            for copy, original in originals.items():
+                message = message.replace(copy, original)
+            raise RenderError(f"on {socket.gethostname()}: {message}") from None
     _SESSIONS[key] = session
     return session, time.perf_counter() - t0
 

@@ -19,6 +19,7 @@ from cluster_scenes import write_cluster_scene  # noqa: E402
 from renderer.api import settings_for  # noqa: E402
 from renderer.cli import main  # noqa: E402
 from renderer.cluster import Cluster, open_cluster  # noqa: E402
+from renderer.errors import RenderError  # noqa: E402
 from renderer.io.images import read_exr  # noqa: E402
 from renderer.session import RenderSession  # noqa: E402
 
@@ -149,3 +150,19 @@ def test_cli_ray_checkpoint_and_resume(local_ray, scene_file, reference, tmp_pat
     chans = read_exr(out)[0]
     assert 0.0 < chans["albedo.R"].mean() <= 1.0
     np.testing.assert_array_equal(np.stack([chans[c] for c in "RGB"], axis=-1), reference)
+
+
+def test_a_failing_worker_is_reported_clearly(local_ray, tmp_path, capsys):
+    """An environment image that only a worker's upload reads, and cannot: exit 2 naming the
+    samples and the worker's own error (no retries: a task's error is not a lost worker)."""
+    scene = write_cluster_scene(tmp_path)
+    (tmp_path / "maps" / "sky.exr").write_bytes(b"not an image")
+    assert main([str(scene), "-o", str(tmp_path / "o.exr"), "--ray", "--ray-workers", "1", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "a worker failed on samples 0..0" in err and str(tmp_path / "maps" / "sky.exr") in err   # not its copy
+
+
+def test_gpu_tasks_on_a_cluster_without_gpus_are_refused(local_ray, scene_file):
+    scene = renderer.load_scene(scene_file)
+    with pytest.raises(RenderError, match="has 0 GPUs"):
+        open_cluster(scene, settings_for(scene), Cluster(task_gpus=1))
