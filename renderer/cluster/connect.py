@@ -23,6 +23,10 @@ def import_ray() -> ModuleType:
     return ray
 
 
+#: Ray 2.5x clusters use token authentication by default, and a ray:// client sends the token only
+#: when told to (the server logs "Authentication required but no authorization header provided").
+TOKEN_HINT = ("; if the cluster uses token authentication, set RAY_AUTH_MODE=token with the head's "
+              "~/.ray/auth_token copied here")
 #: Seconds to wait for a TCP connection to the given address before calling it unreachable (Ray's
 #: own attempts retry for 30 s on a ray:// address and for minutes on a GCS host:port).
 REACH_TIMEOUT = 5.0
@@ -47,13 +51,15 @@ def connect(address: str | None) -> ModuleType:
         return ray
     env = {k: os.environ[k] for k in WORKER_ENV if k in os.environ}
     local = address in (None, "local")
-    if not local and address != "auto":
-        check_reachable(address)
+    explicit = os.environ.get("RAY_ADDRESS") if address == "auto" else address   # auto reads RAY_ADDRESS first
+    if not local and explicit:
+        check_reachable(explicit)
     options = {"include_dashboard": False} if local else {}
     try:
         ray.init(address=None if local else address, runtime_env={"env_vars": env}, log_to_driver=False,
                  logging_level=logging.WARNING, **options)
     except Exception as e:   # Ray raises ConnectionError, RuntimeError, ValueError or its own kinds here
         where = "start a local Ray instance" if local else f"reach the Ray cluster at {address}"
-        raise RenderError(f"cannot {where}: {str(e).splitlines()[0] if str(e) else type(e).__name__}") from None
+        hint = TOKEN_HINT if str(address).startswith("ray://") and "timeout" in str(e) else ""
+        raise RenderError(f"cannot {where}: {str(e).splitlines()[0] if str(e) else type(e).__name__}{hint}") from None
     return ray
