@@ -136,7 +136,8 @@ class _Progress:
                 self.last = decile
                 el = time.perf_counter() - self.t0
                 eta = el / max(done - self.start, 1) * (self.total - done)
-                print(f"render: {done}/{self.total} spp, {el:.1f} s elapsed, ETA {eta:.1f} s{', ' + note if note else ''}", file=sys.stderr, flush=True)
+                print(f"render: {done}/{self.total} spp, {el:.1f} s elapsed, ETA {eta:.1f} s"
+                      f"{', ' + note if note else ''}", file=sys.stderr, flush=True)
 
     def close(self) -> None:
         if self.bar is not None:
@@ -239,12 +240,9 @@ def main(argv: list[str] | None = None) -> int:
             raise RenderError("--ray-chunk and --ray-workers need --ray")
         if args.ray is not None:
             from renderer.cluster import Cluster, open_cluster
-            from renderer.io.checkpoint import load_checkpoint
 
             session = open_cluster(scene, settings, Cluster(args.ray, args.ray_chunk, args.ray_workers),
-                                   device=args.device, threads=args.threads)
-            if args.resume:
-                session.restore(load_checkpoint(args.resume), source=str(args.resume))
+                                   device=args.device, threads=args.threads, resume=args.resume)
         else:
             session = open_session(scene, settings, device=args.device, threads=args.threads, resume=args.resume)
         for w in session.stats.warnings:

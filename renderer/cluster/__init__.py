@@ -25,6 +25,8 @@ the merged film with its finished ranges in the one-process format (:mod:`render
 so ``--resume`` continues with or without a cluster."""
 from __future__ import annotations
 
+from pathlib import Path
+
 from renderer.cluster.driver import Cluster, ClusterRender
 from renderer.scene.description import SceneDescription
 from renderer.settings import RenderSettings
@@ -33,14 +35,20 @@ __all__ = ["Cluster", "ClusterRender", "open_cluster"]
 
 
 def open_cluster(scene: SceneDescription, settings: RenderSettings, cluster: Cluster | str | None,
-                 device: str = "cpu", threads: int | None = None) -> ClusterRender:
+                 device: str = "cpu", threads: int | None = None, resume: str | Path | None = None) -> ClusterRender:
     """A cluster render ready to ``run``; ``cluster`` may be a bare address. A CUDA ``device``
-    gives each task one GPU unless ``cluster`` says otherwise; ``threads`` sets each task's CPUs."""
+    gives each task one GPU unless ``cluster`` says otherwise; ``threads`` sets each task's CPUs;
+    ``resume`` continues a checkpoint (of a cluster or a one-process render)."""
     from dataclasses import replace
+
+    from renderer.io.checkpoint import load_checkpoint
 
     c = cluster if isinstance(cluster, Cluster) else Cluster(address=cluster)
     if device.startswith("cuda") and not c.task_gpus:
         c = replace(c, task_gpus=1.0)
     if threads:
         c = replace(c, task_cpus=threads)
-    return ClusterRender(scene, settings, c)
+    render = ClusterRender(scene, settings, c)
+    if resume is not None:
+        render.restore(load_checkpoint(resume), source=str(resume))
+    return render
