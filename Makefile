@@ -23,7 +23,7 @@ $(BIN)/python:
 
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	$(BIN)/pip install --upgrade pip >/dev/null
-	$(BIN)/pip install -e '.[test,denoise]'
+	$(BIN)/pip install -e '.[test,denoise,cluster]'
 	touch $@
 
 install: $(VENV)/.installed

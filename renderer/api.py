@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import warnings
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
@@ -14,6 +14,9 @@ from renderer.io.checkpoint import load_checkpoint
 from renderer.scene.description import SceneDescription
 from renderer.session import RenderSession, RenderStats
 from renderer.settings import RenderSettings, settings_for
+
+if TYPE_CHECKING:
+    from renderer.cluster import Cluster
 
 __all__ = ["load_scene", "open_session", "render", "init_warp", "settings_for", "RenderStats", "RenderSettings",
            "RenderSession"]
@@ -44,14 +47,21 @@ def render(scene: SceneDescription, spp: int | None = None, device: str = "cpu",
            width: int | None = None, height: int | None = None, max_depth: int | None = None,
            nee: bool = True, rr_depth: int | None = None, threads: int | None = None, time_limit: float | None = None,
            progress: Callable[[int, int], None] | None = None, stats: RenderStats | None = None,
-           thin_film: str | None = None) -> np.ndarray:
+           thin_film: str | None = None, cluster: "Cluster | str | None" = None) -> np.ndarray:
     """Render and return linear RGB as float32 (H, W, 3). ``spp``, ``seed``, ``max_depth`` and the
     resolution default to the scene file's values. ``progress(done, total)`` runs after every pass.
     ``thin_film``: the thinfilm material's colour mode, ``rgb3`` or ``spectral:N`` (default spectral:32).
-    Each of the scene's warnings is issued as a :class:`RenderWarning` (and listed in ``stats.warnings``)."""
-    session = open_session(scene, settings_for(scene, seed=seed, width=width, height=height, max_depth=max_depth,
-                                               nee=nee, rr_depth=rr_depth, thin_film=thin_film),
-                           device=device, threads=threads)
+    Each of the scene's warnings is issued as a :class:`RenderWarning` (and listed in ``stats.warnings``).
+    ``cluster``: render on Ray (a :class:`renderer.cluster.Cluster`, or an address: "local", "auto",
+    "ray://host:port"); the image is bit-identical to the one-process render."""
+    settings = settings_for(scene, seed=seed, width=width, height=height, max_depth=max_depth, nee=nee,
+                            rr_depth=rr_depth, thin_film=thin_film)
+    if cluster is not None:
+        from renderer.cluster import open_cluster
+
+        session = open_cluster(scene, settings, cluster, device=device, threads=threads)
+    else:
+        session = open_session(scene, settings, device=device, threads=threads)
     for w in session.stats.warnings:
         warnings.warn(w, RenderWarning, stacklevel=2)
     spp = scene.sampler.spp if spp is None else int(spp)

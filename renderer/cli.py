@@ -59,6 +59,16 @@ def _aov_list(text: str) -> tuple[str, ...]:
     return names
 
 
+def _positive(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        v = 0
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"must be a whole number of at least 1, got {text!r}")
+    return v
+
+
 def _gib(text: str) -> float:
     try:
         v = float(text)
@@ -99,6 +109,13 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--denoise", action="store_true", help="denoise with Intel OIDN (pip install '.[denoise]')")
     g.add_argument("--reference", type=Path, metavar="REF.exr", help="reference image for --error-log")
     g.add_argument("--error-log", type=Path, metavar="CSV", help="append spp,seconds,relMSE rows as passes finish")
+    r = p.add_argument_group("cluster (Ray; pip install '.[cluster]')")
+    r.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS", help="render on Ray: no address starts a "
+                   "local instance, auto joins `ray start`'s cluster, ray://host:port a remote one")
+    r.add_argument("--ray-chunk", type=_positive, metavar="SPP", help="samples per pixel per task "
+                   "(default: about 30 s of work each)")
+    r.add_argument("--ray-workers", type=_positive, metavar="N", help="tasks in flight (default: one per CPU, "
+                   "or per GPU with --device cuda; --threads sets each task's CPUs)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     return p
@@ -114,7 +131,7 @@ class _Progress:
         self.t0 = time.perf_counter()
         self.start = done
 
-    def __call__(self, done: int) -> None:
+    def __call__(self, done: int, note: str = "") -> None:
         if not self.enabled:
             return
         if sys.stderr.isatty():
@@ -123,13 +140,16 @@ class _Progress:
 
                 self.bar = tqdm(total=self.total, initial=self.start, unit="spp", file=sys.stderr)
             self.bar.update(done - self.bar.n)
+            if note:
+                self.bar.set_postfix_str(note)
         else:
             decile = done * 10 // self.total
             if decile != self.last:
                 self.last = decile
                 el = time.perf_counter() - self.t0
                 eta = el / max(done - self.start, 1) * (self.total - done)
-                print(f"render: {done}/{self.total} spp, {el:.1f} s elapsed, ETA {eta:.1f} s", file=sys.stderr, flush=True)
+                print(f"render: {done}/{self.total} spp, {el:.1f} s elapsed, ETA {eta:.1f} s"
+                      f"{', ' + note if note else ''}", file=sys.stderr, flush=True)
 
     def close(self) -> None:
         if self.bar is not None:
@@ -256,8 +276,16 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
     for what, path in (("output", out), ("checkpoint", args.checkpoint), ("error log", args.error_log)):
         if path is not None:
             _check_writable(path, what)
-    session = open_session(scene, settings, device=args.device, threads=args.threads, resume=args.resume,
-                           memory_limit_gb=args.memory_limit)
+    if args.ray is None and (args.ray_chunk or args.ray_workers):
+        raise RenderError("--ray-chunk and --ray-workers need --ray")
+    if args.ray is not None:
+        from renderer.cluster import Cluster, open_cluster
+
+        session = open_cluster(scene, settings, Cluster(args.ray, args.ray_chunk, args.ray_workers),
+                               device=args.device, threads=args.threads, resume=args.resume)
+    else:
+        session = open_session(scene, settings, device=args.device, threads=args.threads, resume=args.resume,
+                               memory_limit_gb=args.memory_limit)
     for w in session.stats.warnings:
         print(f"warning: {w}", file=sys.stderr)
     if args.resume:
@@ -267,7 +295,7 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
     clock = {"checkpoint": time.perf_counter(), "partial": time.perf_counter()}
 
     def on_pass(s: RenderSession) -> None:
-        prog(s.film.spp)
+        prog(s.film.spp, f"{s.busy} tasks busy" if args.ray is not None else "")
         now = time.perf_counter()
         if args.checkpoint and now - clock["checkpoint"] >= args.checkpoint_every:
             save_checkpoint(args.checkpoint, s.state())
@@ -298,7 +326,8 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
     if args.aov or args.denoise:
         from renderer.integrators.aov import render_aovs
 
-        aovs = render_aovs(session)
+        local = session if args.ray is None else open_session(scene, settings, args.device, args.threads)
+        aovs = render_aovs(local)
         layers = {k: aovs[k] for k in args.aov}
         if args.denoise:
             from renderer.io.denoise import denoise
@@ -312,6 +341,8 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
           f"(+{stats.compile_seconds:.2f} s kernel load), {stats.samples_per_second / 1e6:.3f} M samples/s, "
           f"{stats.rays_per_second / 1e6:.3f} M rays/s, peak memory {stats.peak_memory_mb:.0f} MB",
           file=sys.stderr)
+    for line in session.summary() if args.ray is not None else ():
+        print(f"render: {line}", file=sys.stderr)
     if stats.spp < spp:
         limited = "time limit" if args.time_limit is not None else "interrupt"
         why = signal.Signals(stop.signum).name if stop.signum else limited

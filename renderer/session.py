@@ -1,24 +1,26 @@
 """A progressive render: passes of samples added into a film until a sample count, a time limit
-or a stop request ends it. Its state (the film's sum and count plus what made it) can be saved
-and restored, and a restored render continues bit for bit as if it had never stopped: a pass's
-random numbers depend only on (seed, sample index, pixel), and every pass adds exactly one
-sample per pixel, so the film's float64 sums are formed in the same order however a render is
-split into runs. On the CPU a pass is launched in chunks of a few rows that worker threads take on
-demand (some rows cost far more than others), and each row still gets its one sample per pass
-from exactly one launch, so how rows are shared out never changes the film."""
+or a stop request ends it. Its state (the film's sums and count, which sample indices they hold,
+plus what made it) can be saved and restored, and a restored render continues bit for bit as if it
+had never stopped: a pass's random numbers depend only on (seed, sample index, pixel), and the
+film's fixed-point sums add exactly in any order (:mod:`renderer.device.film`), so neither how a
+render is split into runs nor which process rendered which samples changes a bit. On the CPU a
+pass is launched in chunks of a few rows that worker threads take on demand (some rows cost far
+more than others); each row gets its one sample per pass from exactly one launch."""
 from __future__ import annotations
 
 import os
 import resource
 import time
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from itertools import count
-from typing import Callable
+from typing import Callable, Iterable
 
 import numpy as np
 
 from renderer.errors import RenderError
+from renderer.film_state import FilmState
+from renderer.sample_ranges import Ranges, add_range, missing, samples
 from renderer.scene.description import SceneDescription
 from renderer.settings import RenderSettings
 
@@ -104,6 +106,7 @@ class RenderSession:
         self.threads = max(1, min(threads or default_threads(device), H))
         self.chunks = row_chunks(H, self.threads)
         self._fingerprint: str | None = None
+        self.ranges: Ranges = []      # the sample indices in the film
 
     @property
     def fingerprint(self) -> str:
@@ -124,8 +127,9 @@ class RenderSession:
                 first, rows = self.chunks[i]
                 wp.launch(self.kernel, dim=rows * self.ds.width,
                           inputs=[self.ds.struct, s.seed, sample, first, s.max_depth, s.rr_depth,
-                                  self.film.sum, self.film.bad, self.film.rays],
+                                  self.film.sample, self.film.bad, self.film.rays],
                           device=self.device)
+                self.film.accumulate(first, rows)
                 wp.synchronize_device(self.device)
 
         for f in [pool.submit(worker) for _ in range(self.threads)]:
@@ -133,17 +137,24 @@ class RenderSession:
 
     def run(self, spp: int, time_limit: float | None = None, on_pass: Callable[["RenderSession"], None] | None = None,
             should_stop: Callable[[], bool] | None = None) -> RenderStats:
-        """Render until the film holds ``spp`` samples per pixel, or until the pass that crosses
+        """Render until the film holds samples ``0 .. spp-1``, or until the pass that crosses
         ``time_limit`` seconds (of this call) ends, or ``should_stop()`` turns true after a pass.
         Ctrl-C raised inside a pass is caught after it: finished passes are kept."""
         if spp < 1:
             raise RenderError(f"spp must be at least 1, got {spp}")
+        return self.run_samples(samples(missing(self.ranges, spp)), time_limit, on_pass, should_stop)
+
+    def run_samples(self, indices: Iterable[int], time_limit: float | None = None,
+                    on_pass: Callable[["RenderSession"], None] | None = None,
+                    should_stop: Callable[[], bool] | None = None) -> RenderStats:
+        """Add one pass per sample index (each not yet in the film), stopping as :meth:`run` does."""
         t0 = time.perf_counter()
         base_seconds = self.stats.seconds
         with ThreadPoolExecutor(max_workers=self.threads) as pool:
             try:
-                while self.film.spp < spp:
-                    self._pass(pool, self.film.spp)
+                for sample in indices:
+                    self._pass(pool, sample)
+                    self.ranges = add_range(self.ranges, sample, sample + 1)
                     self.film.spp += 1
                     self._update_stats(base_seconds + time.perf_counter() - t0)
                     if on_pass:
@@ -157,6 +168,13 @@ class RenderSession:
                 self.stats.interrupted = True
         self._update_stats(base_seconds + time.perf_counter() - t0)
         return self.stats
+
+    def clear(self) -> None:
+        """Forget every sample: an empty film, as a cluster worker needs before each range."""
+        self.film.clear()
+        self.ranges = []
+        self.stats.seconds = 0.0
+        self._update_stats(0.0)
 
     def _update_stats(self, seconds: float) -> None:
         st = self.stats
@@ -172,24 +190,14 @@ class RenderSession:
 
     def state(self) -> dict[str, np.ndarray]:
         """Everything needed to continue: the film and what it was made from."""
-        return {"sum": self.film.sum.numpy(), "spp": np.int64(self.film.spp),
-                "bad": np.array([self.film.bad_samples], dtype=np.int32),
-                "rays": np.array([self.film.ray_count]), "seconds": np.float64(self.stats.seconds),
-                "fingerprint": np.str_(self.fingerprint),
-                "settings": np.str_(repr(sorted(asdict(self.settings).items())))}
+        film = FilmState(self.film.sums(), self.ranges, self.film.bad_samples, self.film.ray_count, self.stats.seconds)
+        return film.to_state(self.fingerprint, self.settings)
 
     def restore(self, state: dict[str, np.ndarray], source: str = "checkpoint") -> None:
         """Continue from ``state``; refuses one made by another scene or with other settings."""
-        import warp as wp
-
-        mine = repr(sorted(asdict(self.settings).items()))
-        if str(state["fingerprint"]) != self.fingerprint:
-            raise RenderError(f"{source} was made from a different scene (content differs); refusing to resume")
-        if str(state["settings"]) != mine:
-            raise RenderError(f"{source} was made with other settings {state['settings']}, not {mine}; "
-                              "refusing to resume")
-        self.film.sum.assign(wp.array(state["sum"], dtype=wp.vec3d, device=self.device))
-        self.film.set_counts(int(np.sum(state["bad"])), float(np.sum(state["rays"])))
-        self.film.spp = int(state["spp"])
-        self.stats.seconds = float(state["seconds"])
+        film = FilmState.from_state(state, self.fingerprint, self.settings, self.film.width * self.film.height, source)
+        self.film.set_sums(film.sums)
+        self.film.set_counts(film.bad, film.rays)
+        self.film.spp, self.ranges = film.spp, film.ranges
+        self.stats.seconds = film.seconds
         self._update_stats(self.stats.seconds)

@@ -42,16 +42,25 @@ def _feed(h: "hashlib._Hash", x: Any) -> None:
         h.update(repr(x).encode())
 
 
-def scene_fingerprint(desc: SceneDescription) -> str:
-    """SHA-256 over everything that determines the image (geometry, materials, textures and the
-    files they name, lights, camera), ignoring source locations and warnings."""
-    h = hashlib.sha256()
-    _feed(h, desc)
+def referenced_files(desc: SceneDescription) -> list[Path]:
+    """The files the device upload reads (image textures, environment images), resolved, in scene
+    order; meshes and instance transforms are already arrays in the description."""
+    files = []
     for t in desc.textures.values():
         name = t.params.params.get("filename")
         if name is not None:
-            _feed(h, (t.base_dir / str(name.values[0])).resolve())
-    for light in desc.lights:                       # an environment image counts by its bytes too
+            files.append((t.base_dir / str(name.values[0])).resolve())
+    for light in desc.lights:
         if light.values.get("filename") is not None:
-            _feed(h, Path(light.values["filename"]).resolve())
+            files.append(Path(light.values["filename"]).resolve())
+    return files
+
+
+def scene_fingerprint(desc: SceneDescription) -> str:
+    """SHA-256 over everything that determines the image (geometry, materials, textures and the
+    files they name by their bytes, lights, camera), ignoring source locations and warnings."""
+    h = hashlib.sha256()
+    _feed(h, desc)
+    for path in referenced_files(desc):
+        _feed(h, path)
     return h.hexdigest()
