@@ -1,5 +1,7 @@
 """pbrt's ``perspective`` camera with a thin lens: fov on the shorter image axis, raster +x to
-the right and +y down, camera space looking down +z with +y up."""
+the right and +y down, camera space looking down +z with +y up. The camera also carries what the
+film does per sample (the pixel filter, the sensor's clamp) and the rendered region: with a crop
+window the kernel's pixels are the region's, offset by ``origin`` into the full image."""
 from __future__ import annotations
 
 import math
@@ -7,8 +9,11 @@ import math
 import numpy as np
 import warp as wp
 
+from renderer.pixel_filter import PixelFilter, build_pixel_filter
 from renderer.sampling.warps import concentric_disk
-from renderer.scene.description import CameraDesc
+from renderer.scene.description import CameraDesc, FilmDesc
+from renderer.scene.imaging import film_region
+from renderer.sensor import Sensor, build_sensor
 
 
 @wp.struct
@@ -17,8 +22,12 @@ class Camera:
     screen: wp.vec4           # (x min, x max, y min, y max) of the screen window times tan(fov/2)
     lens_radius: float
     focal_distance: float
-    width: int
+    width: int                # the rendered region's size (the whole image unless cropped)
     height: int
+    origin: wp.vec2           # the region's first pixel in the full image
+    full: wp.vec2             # the full image's resolution
+    filter: PixelFilter
+    sensor: Sensor
 
 
 @wp.struct
@@ -30,8 +39,8 @@ class Ray:
 @wp.func
 def generate_ray(cam: Camera, px: float, py: float, u_lens: wp.vec2) -> Ray:
     """The world-space ray through raster point (px, py), refocused through a point on the lens."""
-    sx = cam.screen[0] + (cam.screen[1] - cam.screen[0]) * (px / float(cam.width))
-    sy = cam.screen[3] - (cam.screen[3] - cam.screen[2]) * (py / float(cam.height))
+    sx = cam.screen[0] + (cam.screen[1] - cam.screen[0]) * ((px + cam.origin[0]) / cam.full[0])
+    sy = cam.screen[3] - (cam.screen[3] - cam.screen[2]) * ((py + cam.origin[1]) / cam.full[1])
     d = wp.normalize(wp.vec3(sx, sy, 1.0))
     o = wp.vec3(0.0)
     if cam.lens_radius > 0.0:
@@ -45,7 +54,9 @@ def generate_ray(cam: Camera, px: float, py: float, u_lens: wp.vec2) -> Ray:
     return r
 
 
-def build_camera(desc: CameraDesc, width: int, height: int) -> Camera:
+def build_camera(desc: CameraDesc, film: FilmDesc, width: int, height: int, device: str) -> tuple[Camera, list]:
+    """The camera for a ``width`` x ``height`` image, cropped as the film says; with the arrays it
+    points into (keep them alive)."""
     c = Camera()
     c.to_world = wp.mat44(*np.asarray(desc.camera_to_world, dtype=np.float32).ravel())
     aspect = width / height
@@ -56,6 +67,10 @@ def build_camera(desc: CameraDesc, width: int, height: int) -> Camera:
         c.screen = wp.vec4(-t, t, -t / aspect, t / aspect)
     c.lens_radius = float(desc.lens_radius)
     c.focal_distance = float(desc.focal_distance)
-    c.width = int(width)
-    c.height = int(height)
-    return c
+    x0, x1, y0, y1 = film_region(film, width, height)
+    c.width, c.height = x1 - x0, y1 - y0
+    c.origin = wp.vec2(float(x0), float(y0))
+    c.full = wp.vec2(float(width), float(height))
+    c.filter, keep = build_pixel_filter(film.filter, device)
+    c.sensor = build_sensor(film, desc)
+    return c, keep

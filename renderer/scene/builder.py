@@ -15,17 +15,18 @@ from typing import Callable, Iterable
 import numpy as np
 
 from renderer import lights, materials
-from renderer.errors import Location, RenderError, SceneError, SceneErrors, UnsupportedError
-from renderer.scene.description import (CameraDesc, FilmDesc, InstanceSetDesc, IntegratorDesc, MeshDesc, SamplerDesc,
+from renderer.errors import Location, SceneError, SceneErrors, UnsupportedError
+from renderer.scene.description import (CameraDesc, InstanceSetDesc, IntegratorDesc, MeshDesc, SamplerDesc,
                                         SceneDescription, ShapeDesc, TextureDesc)
 from renderer.scene.params import ParamSet
 from renderer.scene.parser import Directive
+from renderer.scene.imaging import read_camera, read_film, read_filter
 from renderer.scene.plymesh import ply_mesh
+from renderer.scene.resolve import NamedMaterials, missing_textures
 from renderer.scene.shapes import bilinear_mesh, disk, sphere, triangle_mesh
 from renderer.scene.state import GraphicsState, ObjectDefinition, SavedState
 from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, UNSUPPORTED, WORLD_ONLY
 from renderer.scene.texture_params import read_texture
-from renderer.settings import check_resolution
 from renderer.scene.transform import (from_pbrt_matrix, inverse, look_at, read_instance_transforms, rotate, scale,
                                       swaps_handedness, transformed_mesh, translate)
 
@@ -46,7 +47,8 @@ class Builder:
         self.state = GraphicsState()
         self.saved: list[SavedState] = []
         self.named_coordinate_systems: dict[str, np.ndarray] = {}
-        self.named_materials: dict[str, int] = {}
+        self.named_materials = NamedMaterials()
+        self.refused_textures: set[str] = set()
         self.objects: dict[str, ObjectDefinition] = {}
         self.current_object: ObjectDefinition | None = None
         self.default_material: int | None = None
@@ -64,7 +66,7 @@ class Builder:
                     self._directive(d)
                 except UnsupportedError as e:
                     refused.append(e)
-            self._finish()
+            refused.extend(self._finish())
         except SceneError as e:
             if not refused:
                 raise
@@ -86,7 +88,8 @@ class Builder:
         else:
             handler(d)
 
-    def _finish(self) -> None:
+    def _finish(self) -> list[SceneError]:
+        """Structural errors raise; names that never resolve are returned, to be reported with the rest."""
         if not self.world_begun:
             raise SceneError(f"{self.source}: no WorldBegin, so the file describes no scene", None)
         if self.saved:
@@ -94,6 +97,9 @@ class Builder:
             raise SceneError(f"{s.kind} is never closed", s.loc)
         if not lights.has_lights(self.scene):
             self.scene.warnings.append(f"{self.source}: scene has no lights: the image will be black")
+        errors = self.named_materials.resolve(self.scene, self._current_material(None)) if any(
+            s.material < 0 for s in self.scene.shapes) else []
+        return errors + missing_textures(self.scene, self.refused_textures)
 
     # -- reporting
 
@@ -116,9 +122,14 @@ class Builder:
         return name
 
     def warn_unused(self, d: Directive) -> None:
-        what = f'{d.name} "{d.args[0]}"' if d.args else d.name
-        for p in d.params.unused():
+        self.warn_params(d.params, f'{d.name} "{d.args[0]}"' if d.args else d.name)
+
+    def warn_params(self, params: ParamSet, what: str) -> None:
+        """Parameters nobody read, and earlier copies of a parameter given twice (pbrt-v4 uses the last)."""
+        for p in params.unused():
             self.warn(p.loc, f'{what}: parameter "{p.type} {p.name}" is not supported and was ignored')
+        for p in params.shadowed:
+            self.warn(p.loc, f'{what}: parameter "{p.name}" is given again later; the later value is used (as pbrt-v4)')
 
     # -- transforms
 
@@ -176,30 +187,16 @@ class Builder:
         name = self.check_known(d)
         if name != "perspective":
             self.unsupported(d.name, name, d.loc)
-        p = d.params
-        fov = p.float("fov", 90.0)
-        if not 0.0 < fov < 180.0:
-            raise SceneError(f'Camera: "fov" must be between 0 and 180 degrees, got {fov}', p.get("fov").loc)
-        lens_radius = p.float("lensradius", 0.0, min=0.0)
-        focal_distance = p.float("focaldistance", 1e6)
-        if focal_distance <= 0.0:
-            raise SceneError(f'Camera: "focaldistance" must be > 0, got {focal_distance}', d.loc)
         world_from_camera = inverse(self.state.ctm, "Camera", d.loc)
         self.named_coordinate_systems["camera"] = world_from_camera
-        self.scene.camera = CameraDesc(world_from_camera, fov, lens_radius, focal_distance)
+        self.scene.camera = read_camera(d.params, world_from_camera, d.loc)
         self.warn_unused(d)
 
     def Film(self, d: Directive) -> None:
         name = self.check_known(d)
         if name != "rgb":
             self.unsupported(d.name, name, d.loc)
-        p = d.params
-        self.scene.film = FilmDesc(p.int("xresolution", 1280, min=1), p.int("yresolution", 720, min=1),
-                                   p.string("filename", "pbrt.exr"))
-        try:
-            check_resolution(self.scene.film.width, self.scene.film.height)
-        except RenderError as e:
-            raise SceneError(f"Film: {e}", d.loc) from None
+        self.scene.film = replace(read_film(d.params, d.loc, self.warn), filter=self.scene.film.filter)
         self.warn_unused(d)
 
     def Sampler(self, d: Directive) -> None:
@@ -223,7 +220,8 @@ class Builder:
         self.warn_unused(d)
 
     def PixelFilter(self, d: Directive) -> None:
-        self.unsupported(d.name, self.check_known(d), d.loc)
+        self.scene.film.filter = read_filter(self.check_known(d), d.params, d.loc)
+        self.warn_unused(d)
 
     def Accelerator(self, d: Directive) -> None:
         self.unsupported(d.name, self.check_known(d), d.loc)
@@ -276,8 +274,7 @@ class Builder:
         if kind == "measured":
             self.unsupported("Material", kind, loc)
         self.scene.materials.append(materials.from_pbrt(kind, params, loc, name))
-        for p in params.unused():
-            self.warn(p.loc, f'parameter "{p.name}" of material "{kind}" is not supported and was ignored')
+        self.warn_params(params, f'material "{kind}"')
         return len(self.scene.materials) - 1
 
     def Material(self, d: Directive) -> None:
@@ -285,21 +282,26 @@ class Builder:
 
     def MakeNamedMaterial(self, d: Directive) -> None:
         name = str(d.args[0])
-        if name in self.named_materials:
-            raise SceneError(f'named material "{name}" is defined twice', d.loc)
         kind = d.params.string("type")
         if kind is None:
             raise SceneError(f'MakeNamedMaterial "{name}": "string type" is required', d.loc)
-        self.named_materials[name] = self._add_material(kind, d.params, d.loc, name)
+        try:
+            index = self._add_material(kind, d.params, d.loc, name)
+        except UnsupportedError:
+            self.named_materials.define(name, None, d.loc)
+            raise
+        self.named_materials.define(name, index, d.loc)
 
     def NamedMaterial(self, d: Directive) -> None:
-        name = str(d.args[0])
-        if name not in self.named_materials:
-            raise SceneError(f'no material named "{name}" (define it with MakeNamedMaterial first)', d.loc)
-        self.state.material = self.named_materials[name]
+        """Resolved when the scene is complete, as pbrt-v4 does (see renderer.scene.resolve)."""
+        self.state.material = str(d.args[0])
+        self.state.material_loc = d.loc
 
-    def _current_material(self, loc: Location) -> int:
-        """The current material; before any Material directive pbrt's default, diffuse 0.5."""
+    def _current_material(self, loc: Location | None) -> int:
+        """The current material; before any Material directive pbrt's default, diffuse 0.5; a
+        named one not yet defined gets a placeholder that the end of the scene resolves."""
+        if isinstance(self.state.material, str):
+            return self.named_materials.material_for(self.state.material, self.state.material_loc or loc)
         if self.state.material is not None:
             return self.state.material
         if self.default_material is None:
@@ -314,7 +316,11 @@ class Builder:
         if name in self.scene.textures:
             raise SceneError(f'texture "{name}" is defined twice (first at {self.scene.textures[name].loc})', d.loc)
         desc = TextureDesc(name, value_type, kind, d.params, Path(d.loc.file).parent, d.loc)
-        spec = read_texture(desc)
+        try:
+            spec = read_texture(desc)
+        except UnsupportedError:
+            self.refused_textures.add(name)
+            raise
         if spec.base is not None and spec.base not in self.scene.textures:
             raise SceneError(f'Texture "{name}": no texture named "{spec.base}" is defined before it', d.loc)
         self.warn_unused(d)

@@ -21,7 +21,6 @@ UNSUPPORTED: dict[tuple[str, str], tuple[str, str]] = {
     ("Film", "spectral"): ("warn", 'rendered as an "rgb" film'),
     ("Sampler", "*"): ("warn", "rendered with the independent sampler (low-discrepancy samplers are not implemented)"),
     ("Integrator", "*"): ("warn", 'rendered with the "path" integrator'),
-    ("PixelFilter", "*"): ("warn", "pixel filters are not implemented; samples are box-filtered"),
     ("Accelerator", "*"): ("warn", "the BVH is this renderer's own"),
     ("Attribute", "*"): ("warn", "default parameters set by Attribute are ignored"),
     ("ColorSpace", "*"): ("warn", "colours are always linear sRGB"),
