@@ -25,14 +25,15 @@ BUMP_DELTA = 0.0005
 
 @wp.func
 def load_bsdf(mat: Materials, tex: Textures, spectral: RgbWeightTable, spectral_n: int, m: int,
-              uv: wp.vec2) -> BSDF:
-    """Evaluate a material's parameter textures at uv into the rows of ``BSDF.p``. Takes only the
+              uv: wp.vec2, p_world: wp.vec3) -> BSDF:
+    """Evaluate a material's parameter textures at uv (or, for pbrt's spherical, cylindrical and
+    planar mappings, at the world point) into the rows of ``BSDF.p``. Takes only the
     tables it reads: a CPU call copies struct arguments, and the whole ``Scene`` is 2 kB."""
     p = Slots()
     for j in range(MAX_SLOTS):
         tid = mat.slots[m, j]
         if tid >= 0:
-            v = texture_eval(tex, tid, uv)
+            v = texture_eval(tex, tid, uv, p_world)
             p[j, 0] = v[0]
             p[j, 1] = v[1]
             p[j, 2] = v[2]
@@ -46,14 +47,16 @@ def load_bsdf(mat: Materials, tex: Textures, spectral: RgbWeightTable, spectral_
 
 
 @wp.func
-def bump_normal(scene: Scene, tid: int, uv: wp.vec2, ns: wp.vec3, dpdu: wp.vec3, dpdv: wp.vec3) -> wp.vec3:
+def bump_normal(scene: Scene, tid: int, uv: wp.vec2, p: wp.vec3, ns: wp.vec3, dpdu: wp.vec3,
+                dpdv: wp.vec3) -> wp.vec3:
     """Shading normal perturbed by a float displacement texture (pbrt's bump mapping, without the
-    dn/du term): the displaced surface's tangents cross to the new normal."""
-    d = texture_eval(scene.tex, tid, uv)[0]
+    dn/du term): the displaced surface's tangents cross to the new normal. The offsets move both
+    uv and the point (along dp/du, dp/dv), so every texture mapping sees them."""
+    d = texture_eval(scene.tex, tid, uv, p)[0]
     du = BUMP_DELTA
     dv = BUMP_DELTA
-    d_u = texture_eval(scene.tex, tid, wp.vec2(uv[0] + du, uv[1]))[0]
-    d_v = texture_eval(scene.tex, tid, wp.vec2(uv[0], uv[1] + dv))[0]
+    d_u = texture_eval(scene.tex, tid, wp.vec2(uv[0] + du, uv[1]), p + dpdu * du)[0]
+    d_v = texture_eval(scene.tex, tid, wp.vec2(uv[0], uv[1] + dv), p + dpdv * dv)[0]
     su = dpdu + ns * ((d_u - d) / du)
     sv = dpdv + ns * ((d_v - d) / dv)
     n = wp.cross(su, sv)
@@ -86,7 +89,7 @@ def shading_functions(features: Features) -> Shading:
         if wp.static(has_bump):
             bt = scene.mat.bump[m]
             if bt >= 0:
-                ns = bump_normal(scene, bt, s.uv, ns, s.dpdu, s.dpdv)
+                ns = bump_normal(scene, bt, s.uv, s.p, ns, s.dpdu, s.dpdv)
         return frame_from_tangent(ns, s.dpdu)
 
     @wp.func

@@ -315,7 +315,7 @@ class Builder:
             raise SceneError(f'Texture "{name}": type must be "float" or "spectrum", not "{value_type}"', d.loc)
         if name in self.scene.textures:
             raise SceneError(f'texture "{name}" is defined twice (first at {self.scene.textures[name].loc})', d.loc)
-        desc = TextureDesc(name, value_type, kind, d.params, Path(d.loc.file).parent, d.loc)
+        desc = TextureDesc(name, value_type, kind, d.params, Path(d.loc.file).parent, d.loc, self.state.ctm.copy())
         try:
             spec = read_texture(desc)
         except UnsupportedError:

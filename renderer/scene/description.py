@@ -97,6 +97,7 @@ class TextureDesc:
     params: ParamSet
     base_dir: Path                       # relative file names resolve against the defining file
     loc: Location
+    ctm: np.ndarray | None = None        # (4, 4) world-from-texture: the CTM at the Texture directive
 
 
 @dataclass

@@ -4,7 +4,7 @@ file:line before any device work, and the device texture table builds from the s
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +16,8 @@ from renderer.scene.support import SUPPORTED_TEXTURES, TEXTURE_CLASSES
 
 #: imagemap "wrap" modes, numbered as the device's texel lookup reads them
 WRAP = {"repeat": 0, "clamp": 1, "black": 2}
+#: pbrt-v4's 2D texture mappings, numbered as the device reads them
+MAPPINGS = {"uv": 0, "spherical": 1, "cylindrical": 2, "planar": 3}
 
 Value = float | np.ndarray        # a float texture's scalar or a spectrum texture's RGB
 
@@ -32,6 +34,11 @@ class TextureSpec:
     encoding: str = "sRGB"                           # imagemap encoding: sRGB, linear or "gamma G"
     wrap: str = "repeat"                             # imagemap wrap mode (a key of WRAP)
     base: str | None = None                          # scale: the one factor that is a texture
+    mapping: str = "uv"                              # a key of MAPPINGS
+    #: texture-from-world (4, 4) for the spherical/cylindrical mappings; for planar its first two
+    #: rows are pbrt's v1 and v2 applied after that transform (s, t = row . (p, 1) + udelta, vdelta)
+    xform: tuple[float, ...] = tuple(np.eye(4).ravel())
+    invert: bool = False                             # imagemap: 1 - value, clamped at 0
 
 
 def read_texture(desc: TextureDesc) -> TextureSpec:
@@ -45,24 +52,51 @@ def read_texture(desc: TextureDesc) -> TextureSpec:
         raise UnsupportedError(f'{where}: class "{desc.kind}" is not supported (supported: '
                                f'{", ".join(sorted(SUPPORTED_TEXTURES))})', desc.loc)
     p = desc.params
-    mapping = p.string("mapping", "uv")
-    if mapping != "uv":
-        raise UnsupportedError(f'{where}: mapping "{mapping}" is not supported (only "uv")',
-                               p.params["mapping"].loc)
-    uvmap = (p.float("uscale", 1.0), p.float("vscale", 1.0), p.float("udelta", 0.0), p.float("vdelta", 0.0))
     const = p.float if desc.value_type == "float" else p.rgb
     if desc.kind == "constant":
         return TextureSpec("constant", const("value", 1.0))
+    if desc.kind == "scale":
+        return _scale(desc, where)
+    mapped = _mapping(desc, where)
     if desc.kind == "checkerboard":
         if p.int("dimension", 2) != 2:
             raise UnsupportedError(f"{where}: only 2D checkerboard textures are supported", desc.loc)
-        return TextureSpec("checkerboard", const("tex1", 1.0), const("tex2", 0.0), uvmap)
-    if desc.kind == "scale":
-        return _scale(desc, where)
-    return _imagemap(desc, where, uvmap)
+        return replace(mapped, kind="checkerboard", value=const("tex1", 1.0), alt=const("tex2", 0.0))
+    return _imagemap(desc, where, mapped)
 
 
-def _imagemap(desc: TextureDesc, where: str, uvmap: tuple[float, float, float, float]) -> TextureSpec:
+def _mapping(desc: TextureDesc, where: str) -> TextureSpec:
+    """pbrt-v4's TextureMapping2D: "uv" (uscale, vscale, udelta, vdelta), "spherical" and
+    "cylindrical" about the texture space's origin and z axis, "planar" (v1, v2, udelta, vdelta);
+    texture space is the CTM at the Texture directive."""
+    p = desc.params
+    mapping = p.string("mapping", "uv")
+    if mapping not in MAPPINGS:
+        raise SceneError(f'{where}: unknown mapping "{mapping}" (pbrt-v4 knows {", ".join(MAPPINGS)})',
+                         p.params["mapping"].loc)
+    if mapping == "uv":
+        uvmap = (p.float("uscale", 1.0), p.float("vscale", 1.0), p.float("udelta", 0.0), p.float("vdelta", 0.0))
+        return TextureSpec("", 0.0, uvmap=uvmap)
+    m = np.linalg.inv(desc.ctm if desc.ctm is not None else np.eye(4))
+    uvmap = (1.0, 1.0, 0.0, 0.0)
+    if mapping == "planar":
+        v1, v2 = (_vector(p, name, default, where) for name, default in (("v1", (1, 0, 0)), ("v2", (0, 1, 0))))
+        rows = np.zeros((4, 4))
+        rows[0], rows[1], rows[3, 3] = v1 @ m[:3], v2 @ m[:3], 1.0
+        m, uvmap = rows, (1.0, 1.0, p.float("udelta", 0.0), p.float("vdelta", 0.0))
+    return TextureSpec("", 0.0, uvmap=uvmap, mapping=mapping, xform=tuple(float(x) for x in m.ravel()))
+
+
+def _vector(p, name: str, default: tuple, where: str) -> np.ndarray:
+    v = p.floats(name, ("vector3", "vector", "normal3", "point3", "float"))
+    if v is None:
+        return np.asarray(default, dtype=np.float64)
+    if len(v) != 3:
+        raise SceneError(f'{where}: "{name}" needs 3 values, got {len(v)}', p.params[name].loc)
+    return v
+
+
+def _imagemap(desc: TextureDesc, where: str, mapped: TextureSpec) -> TextureSpec:
     p = desc.params
     fname = p.string("filename")
     if not fname:
@@ -75,10 +109,9 @@ def _imagemap(desc: TextureDesc, where: str, uvmap: tuple[float, float, float, f
     if wrap not in WRAP:
         raise SceneError(f'{where}: imagemap wrap must be one of {sorted(WRAP)}, got "{wrap}"', desc.loc)
     scale = p.float("scale", 1.0)
-    if p.bool("invert", False):
-        raise UnsupportedError(f'{where}: imagemap "invert" is not supported', desc.loc)
     p.string("filter")                     # the filter is always bilinear; asking for another is fine
-    return TextureSpec("imagemap", scale, uvmap=uvmap, path=path, encoding=encoding, wrap=wrap)
+    return replace(mapped, kind="imagemap", value=scale, path=path, encoding=encoding, wrap=wrap,
+                   invert=bool(p.bool("invert", False)))
 
 
 def check_encoding(encoding: str, where: str, loc: Location) -> None:

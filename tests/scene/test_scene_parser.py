@@ -275,7 +275,7 @@ def test_defaults_without_options(tmp_path):
     (HEAD + 'Texture "t" "spectrum" "imagemap" "string filename" "nope.png"', 3, "texture image not found"),
     (HEAD + 'Texture "t" "spectrum" "imagemap"', 3, 'needs "string filename"'),
     (HEAD + 'Texture "t" "float" "checkerboard" "integer dimension" 3', 3, "only 2D"),
-    (HEAD + 'Texture "t" "float" "checkerboard"\n  "string mapping" "spherical"', 4, 'mapping "spherical"'),
+    (HEAD + 'Texture "t" "float" "checkerboard"\n  "string mapping" "bogus"', 4, 'unknown mapping "bogus"'),
     (HEAD + 'Texture "t" "float" "checkerboard" "rgb tex1" [1 0 0]', 3, '"tex1" must be of type float'),
     (HEAD + 'Texture "t" "float" "scale" "texture tex" "nope"', 3, 'no texture named "nope"'),
 ])
