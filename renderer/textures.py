@@ -1,7 +1,9 @@
 """Textures on the device: one table of records (constant, image, checkerboard) and one pool of
 image pixels. Every material parameter is a texture id, so constants and maps share one path.
 Image and checkerboard records map the hit to texture coordinates with pbrt-v4's 2D mappings:
-the surface's uv, or spherical/cylindrical/planar from the world-space point."""
+the surface's uv, or spherical/cylindrical/planar from the world-space point. pbrt's mix,
+directionmix and scale-of-two-textures combine up to three other records; those inputs must be
+plain records (constant, image, checkerboard), as Warp functions cannot recurse."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -17,6 +19,9 @@ from renderer.scene.texture_params import MAPPINGS, WRAP, read_texture
 CONSTANT = 0
 IMAGE = 1
 CHECKERBOARD = 2
+MIX = 3
+DIRECTION_MIX = 4
+PRODUCT = 5
 UV, SPHERICAL, CYLINDRICAL, PLANAR = (MAPPINGS[k] for k in ("uv", "spherical", "cylindrical", "planar"))
 
 
@@ -24,7 +29,8 @@ UV, SPHERICAL, CYLINDRICAL, PLANAR = (MAPPINGS[k] for k in ("uv", "spherical", "
 class Textures:
     kind: wp.array(dtype=int)
     scale: wp.array(dtype=wp.vec3)      # constant value, or multiplier of an image / checker tex1
-    alt: wp.array(dtype=wp.vec3)        # checkerboard tex2
+    alt: wp.array(dtype=wp.vec3)        # checkerboard tex2; directionmix: the world direction
+    inputs: wp.array(dtype=wp.vec3i)    # mix (tex1, tex2, amount), directionmix (tex1, tex2), product (a, b)
     uvmap: wp.array(dtype=wp.vec4)      # (su, sv, du, dv): st = (su u + du, sv v + dv)
     mapping: wp.array(dtype=int)        # UV, SPHERICAL, CYLINDRICAL or PLANAR
     xform: wp.array(dtype=wp.mat44)     # texture-from-world (planar: rows v1, v2 folded in)
@@ -83,9 +89,27 @@ def _coordinates(T: Textures, tid: int, uv: wp.vec2, p: wp.vec3) -> wp.vec2:
 
 
 @wp.func
-def texture_eval(T: Textures, tid: int, uv: wp.vec2, p: wp.vec3) -> wp.vec3:
-    """The texture's value at surface coordinates uv and world point p (float textures use the
-    first channel)."""
+def texture_eval(T: Textures, tid: int, uv: wp.vec2, p: wp.vec3, n: wp.vec3) -> wp.vec3:
+    """The texture's value at surface coordinates uv, world point p and geometric normal n (float
+    textures use the first channel)."""
+    k = T.kind[tid]
+    if k < MIX:
+        return _plain(T, tid, uv, p)
+    c = T.inputs[tid]
+    a = _plain(T, c[0], uv, p)
+    b = _plain(T, c[1], uv, p)
+    if k == PRODUCT:
+        return wp.cw_mul(T.scale[tid], wp.cw_mul(a, b))
+    if k == MIX:
+        t = _plain(T, c[2], uv, p)[0]
+        return wp.cw_mul(T.scale[tid], a * (1.0 - t) + b * t)
+    t = wp.abs(wp.dot(n, T.alt[tid]))
+    return wp.cw_mul(T.scale[tid], a * t + b * (1.0 - t))
+
+
+@wp.func
+def _plain(T: Textures, tid: int, uv: wp.vec2, p: wp.vec3) -> wp.vec3:
+    """A constant, image or checkerboard record's value."""
     k = T.kind[tid]
     if k == CONSTANT:
         return T.scale[tid]
@@ -106,6 +130,7 @@ class TextureTable:
     alt: list[np.ndarray] = field(default_factory=list)
     uvmap: list[tuple[float, float, float, float]] = field(default_factory=list)
     mapping: list[int] = field(default_factory=list)
+    inputs: list[tuple[int, int, int]] = field(default_factory=list)
     xform: list[tuple[float, ...]] = field(default_factory=list)
     image: list[tuple[int, int, int, int]] = field(default_factory=list)
     pixels: list[np.ndarray] = field(default_factory=list)
@@ -114,8 +139,10 @@ class TextureTable:
     _image_cache: dict[tuple[Path, str], tuple[int, int, int]] = field(default_factory=dict)
 
     def _add(self, kind: int, scale, alt=(0.0, 0.0, 0.0), uvmap=(1.0, 1.0, 0.0, 0.0), image=(0, 1, 1, 0),
-             mapping: int = UV, xform: tuple[float, ...] = tuple(np.eye(4).ravel())) -> int:
+             mapping: int = UV, xform: tuple[float, ...] = tuple(np.eye(4).ravel()),
+             inputs: tuple[int, int, int] = (0, 0, 0)) -> int:
         self.kind.append(kind)
+        self.inputs.append(tuple(int(i) for i in inputs))
         self.mapping.append(int(mapping))
         self.xform.append(tuple(float(x) for x in xform))
         self.scale.append(np.broadcast_to(np.asarray(scale, dtype=np.float32), (3,)))
@@ -165,11 +192,25 @@ class TextureTable:
                             image=(off, w, h, WRAP[spec.wrap]), **self._mapped(spec))
         elif spec.kind == "checkerboard":
             tid = self._add(CHECKERBOARD, spec.value, alt=spec.alt, uvmap=spec.uvmap, **self._mapped(spec))
+        elif spec.kind in ("mix", "directionmix", "product"):
+            kind = {"mix": MIX, "directionmix": DIRECTION_MIX, "product": PRODUCT}[spec.kind]
+            ids = [self._input(v, desc, textures) for v in spec.inputs]
+            tid = self._add(kind, spec.value, alt=spec.alt, inputs=(*ids, *[0] * (3 - len(ids))))
         elif spec.base is None:             # a scale of two constants
             tid = self.add_constant(spec.value)
         else:
             tid = self._scaled(self.lookup(spec.base, desc.value_type, textures, desc.loc), spec.value)
         self.named[key] = tid
+        return tid
+
+    def _input(self, v, desc: TextureDesc, textures: dict[str, TextureDesc]) -> int:
+        """An input of a mix or product: a constant, or a named texture that is not itself one."""
+        if not isinstance(v, str):
+            return self.add_constant(v)
+        tid = self.lookup(v, desc.value_type, textures, desc.loc)
+        if self.kind[tid] >= MIX:
+            raise SceneError(f'Texture "{desc.name}": its input "{v}" is itself a mix, directionmix or scale of '
+                             "two textures; one level of these is supported", desc.loc)
         return tid
 
     @staticmethod
@@ -180,8 +221,9 @@ class TextureTable:
         """A copy of record ``base`` with its values multiplied by ``factor`` (pbrt's scale texture)."""
         self.kind.append(self.kind[base])
         self.scale.append(self.scale[base] * factor)
-        self.alt.append(self.alt[base] * factor)
+        self.alt.append(self.alt[base] if self.kind[base] == DIRECTION_MIX else self.alt[base] * factor)
         self.uvmap.append(self.uvmap[base])
+        self.inputs.append(self.inputs[base])
         self.mapping.append(self.mapping[base])
         self.xform.append(self.xform[base])
         self.image.append(self.image[base])
@@ -201,9 +243,10 @@ class TextureTable:
         T.scale = wp.array(pad(self.scale, (n, 3)), dtype=wp.vec3, device=device)
         T.alt = wp.array(pad(self.alt, (n, 3)), dtype=wp.vec3, device=device)
         T.uvmap = wp.array(pad(self.uvmap, (n, 4)), dtype=wp.vec4, device=device)
+        T.inputs = wp.array(np.asarray(self.inputs or [(0, 0, 0)], dtype=np.int32), dtype=wp.vec3i, device=device)
         T.mapping = wp.array(np.asarray(self.mapping or [UV], dtype=np.int32), dtype=int, device=device)
         T.xform = wp.array(pad(self.xform, (n, 4, 4)), dtype=wp.mat44, device=device)
         T.image = wp.array(np.asarray(self.image or [(0, 1, 1, 0)], dtype=np.int32), dtype=wp.vec4i, device=device)
         pix = np.concatenate(self.pixels) if self.pixels else np.zeros((1, 3), np.float32)
         T.pixels = wp.array(pix, dtype=wp.vec3, device=device)
-        return T, [T.kind, T.scale, T.alt, T.uvmap, T.mapping, T.xform, T.image, T.pixels]
+        return T, [T.kind, T.scale, T.alt, T.inputs, T.uvmap, T.mapping, T.xform, T.image, T.pixels]

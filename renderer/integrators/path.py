@@ -100,7 +100,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
             if depth >= max_depth:
                 break
             m = scene.shape_material[shape]
-            b = load_bsdf(scene.mat, scene.tex, scene.spectral, scene.spectral_n, m, s.uv, s.p)
+            b = load_bsdf(scene.mat, scene.tex, scene.spectral, scene.spectral_n, m, s)
             b.wavelength_u = wp.randf(rng)
             if wp.static(has_sss):
                 # subsurface scattering may move the vertex to where light leaves the object

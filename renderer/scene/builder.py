@@ -26,7 +26,7 @@ from renderer.scene.resolve import NamedMaterials, missing_textures
 from renderer.scene.shapes import bilinear_mesh, disk, sphere, triangle_mesh
 from renderer.scene.state import GraphicsState, ObjectDefinition, SavedState
 from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, UNSUPPORTED, WORLD_ONLY
-from renderer.scene.texture_params import read_texture
+from renderer.scene.texture_params import check_inputs, read_texture
 from renderer.scene.transform import (from_pbrt_matrix, inverse, look_at, read_instance_transforms, rotate, scale,
                                       swaps_handedness, transformed_mesh, translate)
 
@@ -321,8 +321,10 @@ class Builder:
         except UnsupportedError:
             self.refused_textures.add(name)
             raise
-        if spec.base is not None and spec.base not in self.scene.textures:
-            raise SceneError(f'Texture "{name}": no texture named "{spec.base}" is defined before it', d.loc)
+        for ref in spec.refs:
+            if ref not in self.scene.textures and ref not in self.refused_textures:
+                raise SceneError(f'Texture "{name}": no texture named "{ref}" is defined before it', d.loc)
+        check_inputs(spec, desc, self.scene.textures)
         self.warn_unused(d)
         self.scene.textures[name] = desc
 

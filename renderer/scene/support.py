@@ -49,7 +49,7 @@ WORLD_ONLY = frozenset({"AttributeBegin", "AttributeEnd", "Attribute", "Shape", 
                         "ObjectEnd", "ObjectInstance", "LightSource", "AreaLightSource", "Material",
                         "MakeNamedMaterial", "NamedMaterial", "Texture"})
 
-#: pbrt-v4's texture classes, and the ones this renderer implements (with "uv" mapping only).
+#: pbrt-v4's texture classes, and the ones this renderer implements.
 TEXTURE_CLASSES = frozenset({"bilerp", "checkerboard", "constant", "directionmix", "dots", "fbm", "imagemap", "marble",
                              "mix", "ptex", "scale", "windy", "wrinkled"})
-SUPPORTED_TEXTURES = frozenset({"constant", "imagemap", "checkerboard", "scale"})
+SUPPORTED_TEXTURES = frozenset({"constant", "imagemap", "checkerboard", "scale", "mix", "directionmix"})

@@ -39,6 +39,14 @@ class TextureSpec:
     #: rows are pbrt's v1 and v2 applied after that transform (s, t = row . (p, 1) + udelta, vdelta)
     xform: tuple[float, ...] = tuple(np.eye(4).ravel())
     invert: bool = False                             # imagemap: 1 - value, clamped at 0
+    #: mix: (tex1, tex2, amount); directionmix: (tex1, tex2); product (a scale of two textures):
+    #: (tex, scale). Each a texture's name or a constant.
+    inputs: tuple = ()
+
+    @property
+    def refs(self) -> list[str]:
+        """The textures this one reads, which must be defined before it (as in pbrt-v4)."""
+        return [r for r in (self.base, *self.inputs) if isinstance(r, str)]
 
 
 def read_texture(desc: TextureDesc) -> TextureSpec:
@@ -57,6 +65,8 @@ def read_texture(desc: TextureDesc) -> TextureSpec:
         return TextureSpec("constant", const("value", 1.0))
     if desc.kind == "scale":
         return _scale(desc, where)
+    if desc.kind in ("mix", "directionmix"):
+        return _mix(desc)
     mapped = _mapping(desc, where)
     if desc.kind == "checkerboard":
         if p.int("dimension", 2) != 2:
@@ -129,14 +139,42 @@ def check_encoding(encoding: str, where: str, loc: Location) -> None:
     raise SceneError(f'{where}: encoding must be "sRGB", "linear" or "gamma G" with G > 0, got "{encoding}"', loc)
 
 
+def check_inputs(spec: TextureSpec, desc: TextureDesc, textures: dict[str, TextureDesc]) -> None:
+    """A mix, directionmix or product reads plain textures only (the device evaluates one level):
+    refused at load otherwise."""
+    def combines(name: str) -> bool:
+        s = read_texture(textures[name])
+        return bool(s.inputs) or (s.base is not None and s.base in textures and combines(s.base))
+
+    nested = [r for r in spec.inputs if isinstance(r, str) and r in textures and combines(r)]
+    if nested:
+        raise UnsupportedError(f'Texture "{desc.name}": its input "{nested[0]}" is itself a mix, directionmix or '
+                               "scale of two textures; one level of these is supported", desc.loc)
+
+
+def _mix(desc: TextureDesc) -> TextureSpec:
+    """pbrt-v4's mix, (1 - amount) tex1 + amount tex2, and directionmix, a tex1 + (1 - a) tex2
+    with a = |n . dir| (dir given in texture space, normalised in world space)."""
+    p = desc.params
+    read = p.float_or_texture if desc.value_type == "float" else p.rgb_or_texture
+    tex1, tex2 = read("tex1", 0.0), read("tex2", 1.0)
+    if desc.kind == "mix":
+        return TextureSpec("mix", 1.0, inputs=(tex1, tex2, p.float_or_texture("amount", 0.5)))
+    d = _vector(p, "dir", (0.0, 1.0, 0.0), f'Texture "{desc.name}"')
+    world = (desc.ctm if desc.ctm is not None else np.eye(4))[:3, :3] @ d
+    if not np.linalg.norm(world) > 0.0:
+        raise SceneError(f'Texture "{desc.name}": "dir" must not be zero', desc.loc)
+    return TextureSpec("directionmix", 1.0, alt=world / np.linalg.norm(world), inputs=(tex1, tex2))
+
+
 def _scale(desc: TextureDesc, where: str) -> TextureSpec:
-    """pbrt's ``scale`` texture (tex × scale) where at most one factor is a texture: the constant
-    factor folds into that texture's multiplier."""
+    """pbrt's ``scale`` texture (tex × scale): a constant factor folds into the other factor's
+    multiplier; two textures make a product record."""
     p = desc.params
     read = p.float_or_texture if desc.value_type == "float" else p.rgb_or_texture
     tex, scale = read("tex", 1.0), read("scale", 1.0)
     if isinstance(tex, str) and isinstance(scale, str):
-        raise UnsupportedError(f"{where}: a scale texture of two textures is not supported", desc.loc)
+        return TextureSpec("product", 1.0, inputs=(tex, scale))
     if isinstance(tex, str) or isinstance(scale, str):
         base, factor = (tex, scale) if isinstance(tex, str) else (scale, tex)
         return TextureSpec("scale", np.asarray(factor, dtype=np.float32), base=base)

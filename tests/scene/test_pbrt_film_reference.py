@@ -122,3 +122,19 @@ def test_texture_mappings_and_invert_match_pbrt(tmp_path):
     (tmp_path / "uv.pbrt").write_text(text)
     uv, uv_var = ours(load_scene(tmp_path / "uv.pbrt"))
     assert chi(uv, uv_var, ref, ref_var) > DISTINCT
+
+
+def test_mix_directionmix_and_product_textures_match_pbrt(tmp_path):
+    """texture_mix.pbrt; with each mix's two inputs swapped (pbrt weights tex2 by the amount in mix
+    but tex1 by |n . dir| in directionmix), the comparison fails."""
+    img, var = ours_of("texture_mix")
+    ref, ref_var = reference("texture_mix")
+    assert chi(img, var, ref, ref_var) < CHI
+    np.testing.assert_allclose(img.mean((0, 1)), ref.mean((0, 1)), rtol=MEAN_TOL)
+    text = (DATA / "texture_mix.pbrt").read_text()
+    text = text.replace('"texture tex1" "img" "rgb tex2" [0.9 0.9 0.9]', '"rgb tex1" [0.9 0.9 0.9] "texture tex2" "img"')
+    text = text.replace('"texture tex1" "img" "rgb tex2" [0.15 0.15 0.15]', '"rgb tex1" [0.15 0.15 0.15] "texture tex2" "img"')
+    (tmp_path / "grey_pattern.png").write_bytes((DATA / "grey_pattern.png").read_bytes())
+    (tmp_path / "swapped.pbrt").write_text(text)
+    swapped, swapped_var = ours(load_scene(tmp_path / "swapped.pbrt"))
+    assert chi(swapped, swapped_var, ref, ref_var) > DISTINCT

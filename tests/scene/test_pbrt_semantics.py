@@ -120,3 +120,16 @@ def test_a_corrupt_gzip_file_is_a_located_error(tmp_path, name):
     with pytest.raises(SceneError, match="not a readable gzip file") as info:
         load_description(path)
     assert info.value.loc == Location(str(path), 3)
+
+
+def test_mix_inputs_must_be_defined_before_and_one_level_deep(tmp_path):
+    with pytest.raises(SceneError, match='no texture named "later" is defined before it'):
+        load_description(write(tmp_path, HEAD + 'Texture "m" "float" "mix" "texture tex1" "later"\n'
+                                                'Texture "later" "float" "constant"\n'))
+    path = write(tmp_path, HEAD + 'Texture "a" "float" "constant" "float value" 0.2\n'
+                                  'Texture "m" "float" "mix" "texture tex1" "a"\n'
+                                  'Texture "s" "float" "scale" "texture tex" "m" "float scale" 2\n'
+                                  'Texture "mm" "float" "directionmix" "texture tex2" "s"\n')
+    with pytest.raises(SceneError, match='input "s" is itself a mix') as info:
+        load_description(path)
+    assert info.value.loc == Location(str(path), 6)
