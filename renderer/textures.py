@@ -13,7 +13,7 @@ import numpy as np
 import warp as wp
 
 from renderer.errors import SceneError
-from renderer.scene.description import TextureDesc
+from renderer.scene.description import TextureDesc, find_texture
 from renderer.scene.texture_params import MAPPINGS, WRAP, read_texture
 
 CONSTANT = 0
@@ -194,7 +194,8 @@ class TextureTable:
             tid = self._add(CHECKERBOARD, spec.value, alt=spec.alt, uvmap=spec.uvmap, **self._mapped(spec))
         elif spec.kind in ("mix", "directionmix", "product"):
             kind = {"mix": MIX, "directionmix": DIRECTION_MIX, "product": PRODUCT}[spec.kind]
-            ids = [self._input(v, desc, textures) for v in spec.inputs]
+            types = (desc.value_type, desc.value_type, "float")        # a mix's amount is a float texture
+            ids = [self._input(v, t, desc, textures) for v, t in zip(spec.inputs, types)]
             tid = self._add(kind, spec.value, alt=spec.alt, inputs=(*ids, *[0] * (3 - len(ids))))
         elif spec.base is None:             # a scale of two constants
             tid = self.add_constant(spec.value)
@@ -203,11 +204,11 @@ class TextureTable:
         self.named[key] = tid
         return tid
 
-    def _input(self, v, desc: TextureDesc, textures: dict[str, TextureDesc]) -> int:
+    def _input(self, v, value_type: str, desc: TextureDesc, textures: dict[str, TextureDesc]) -> int:
         """An input of a mix or product: a constant, or a named texture that is not itself one."""
         if not isinstance(v, str):
             return self.add_constant(v)
-        tid = self.lookup(v, desc.value_type, textures, desc.loc)
+        tid = self.lookup(v, value_type, textures, desc.loc)
         if self.kind[tid] >= MIX:
             raise SceneError(f'Texture "{desc.name}": its input "{v}" is itself a mix, directionmix or scale of '
                              "two textures; one level of these is supported", desc.loc)
@@ -230,7 +231,7 @@ class TextureTable:
         return len(self.kind) - 1
 
     def lookup(self, name: str, value_type: str, textures: dict[str, TextureDesc], loc) -> int:
-        desc = textures.get(name)
+        desc = find_texture(textures, name, value_type)
         if desc is None:
             raise SceneError(f'unknown texture "{name}"', loc)
         return self.add_described(desc, textures)

@@ -22,7 +22,7 @@ from renderer.scene.params import ParamSet
 from renderer.scene.parser import Directive
 from renderer.scene.imaging import read_camera, read_film, read_filter
 from renderer.scene.plymesh import ply_mesh
-from renderer.scene.resolve import NamedMaterials, missing_textures
+from renderer.scene.resolve import NamedMaterials, missing_textures, texture_key
 from renderer.scene.shapes import bilinear_mesh, disk, sphere, triangle_mesh
 from renderer.scene.state import GraphicsState, ObjectDefinition, SavedState
 from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, UNSUPPORTED, WORLD_ONLY
@@ -313,8 +313,7 @@ class Builder:
         name, value_type, kind = (str(a) for a in d.args)
         if value_type not in ("float", "spectrum"):
             raise SceneError(f'Texture "{name}": type must be "float" or "spectrum", not "{value_type}"', d.loc)
-        if name in self.scene.textures:
-            raise SceneError(f'texture "{name}" is defined twice (first at {self.scene.textures[name].loc})', d.loc)
+        key = texture_key(self.scene.textures, name, value_type, d.loc)
         desc = TextureDesc(name, value_type, kind, d.params, Path(d.loc.file).parent, d.loc, self.state.ctm.copy())
         try:
             spec = read_texture(desc)
@@ -322,11 +321,11 @@ class Builder:
             self.refused_textures.add(name)
             raise
         for ref in spec.refs:
-            if ref not in self.scene.textures and ref not in self.refused_textures:
+            if ref not in self.scene.textures and ref not in self.refused_textures:     # either type, as pbrt
                 raise SceneError(f'Texture "{name}": no texture named "{ref}" is defined before it', d.loc)
         check_inputs(spec, desc, self.scene.textures)
         self.warn_unused(d)
-        self.scene.textures[name] = desc
+        self.scene.textures[key] = desc
 
     # -- lights: each light module reads its own parameters (renderer.lights)
 

@@ -100,6 +100,13 @@ class TextureDesc:
     ctm: np.ndarray | None = None        # (4, 4) world-from-texture: the CTM at the Texture directive
 
 
+def find_texture(textures: dict[str, TextureDesc], name: str, value_type: str) -> TextureDesc | None:
+    """The texture ``name`` of ``value_type``. pbrt-v4 keeps float and spectrum textures in two name
+    spaces: the first texture of a name is stored under the name, a second one of the other type
+    under "<type>:<name>". A look-up of the other type falls back to the one there is."""
+    return textures.get(f"{value_type}:{name}") or textures.get(name)
+
+
 @dataclass
 class MaterialDesc:
     """Build with :func:`renderer.materials.material`, which validates the values."""

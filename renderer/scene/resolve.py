@@ -9,7 +9,7 @@ from dataclasses import dataclass, field, replace
 
 from renderer.errors import Location, SceneError
 from renderer.parameters import TextureRef
-from renderer.scene.description import SceneDescription
+from renderer.scene.description import SceneDescription, TextureDesc
 
 
 @dataclass
@@ -52,6 +52,17 @@ class NamedMaterials:
                                          'MakeNamedMaterial defines it anywhere in the scene)', s.loc))
             scene.shapes[i] = replace(s, material=default_material)
         return errors
+
+
+def texture_key(textures: dict[str, TextureDesc], name: str, value_type: str, loc: Location) -> str:
+    """Where a new texture is stored (see :func:`renderer.scene.description.find_texture`: float and spectrum textures have
+    two name spaces, as in pbrt-v4); a second texture of one name and type is an error."""
+    key = name if name not in textures else f"{value_type}:{name}"
+    first = textures.get(key) or (textures[name] if textures.get(name, None) is not None and
+                                  textures[name].value_type == value_type else None)
+    if first is not None:
+        raise SceneError(f'{value_type} texture "{name}" is defined twice (first at {first.loc})', loc)
+    return key
 
 
 def missing_textures(scene: SceneDescription, refused: set[str]) -> list[SceneError]:

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from renderer.errors import Location, SceneError, UnsupportedError
-from renderer.scene.description import TextureDesc
+from renderer.scene.description import TextureDesc, find_texture
 from renderer.scene.parser import require_file
 from renderer.scene.support import SUPPORTED_TEXTURES, TEXTURE_CLASSES
 
@@ -142,11 +142,12 @@ def check_encoding(encoding: str, where: str, loc: Location) -> None:
 def check_inputs(spec: TextureSpec, desc: TextureDesc, textures: dict[str, TextureDesc]) -> None:
     """A mix, directionmix or product reads plain textures only (the device evaluates one level):
     refused at load otherwise."""
-    def combines(name: str) -> bool:
-        s = read_texture(textures[name])
-        return bool(s.inputs) or (s.base is not None and s.base in textures and combines(s.base))
+    def combines(name: str, value_type: str) -> bool:
+        s = read_texture(find_texture(textures, name, value_type))
+        return bool(s.inputs) or (s.base is not None and s.base in textures and combines(s.base, value_type))
 
-    nested = [r for r in spec.inputs if isinstance(r, str) and r in textures and combines(r)]
+    types = (desc.value_type, desc.value_type, "float")
+    nested = [r for r, t in zip(spec.inputs, types) if isinstance(r, str) and r in textures and combines(r, t)]
     if nested:
         raise UnsupportedError(f'Texture "{desc.name}": its input "{nested[0]}" is itself a mix, directionmix or '
                                "scale of two textures; one level of these is supported", desc.loc)

@@ -133,3 +133,22 @@ def test_mix_inputs_must_be_defined_before_and_one_level_deep(tmp_path):
     with pytest.raises(SceneError, match='input "s" is itself a mix') as info:
         load_description(path)
     assert info.value.loc == Location(str(path), 6)
+
+
+def test_float_and_spectrum_textures_have_separate_name_spaces(tmp_path):
+    """pbrt-v4 allows a float and a spectrum texture of one name (it rendered such a scene); each
+    material parameter finds the one of its type. Two of one type are an error."""
+    from renderer.textures import TextureTable
+
+    s = load_description(write(tmp_path, HEAD + 'Texture "b" "spectrum" "constant" "rgb value" [0 1 0]\n'
+                                                'Texture "b" "float" "constant" "float value" 0.25\n'
+                                                'Material "conductor" "texture reflectance" "b" "texture roughness" "b"\n'
+                                                'Shape "sphere"\n'))
+    table = TextureTable()
+    assert table.scale[table.lookup("b", "spectrum", s.textures, None)].tolist() == [0.0, 1.0, 0.0]
+    assert table.scale[table.lookup("b", "float", s.textures, None)].tolist() == [0.25] * 3
+    path = write(tmp_path, HEAD + 'Texture "b" "float" "constant"\nTexture "b" "spectrum" "constant"\n'
+                                  'Texture "b" "float" "constant"\n')
+    with pytest.raises(SceneError, match='float texture "b" is defined twice') as info:
+        load_description(path)
+    assert info.value.loc == Location(str(path), 5)
