@@ -122,12 +122,13 @@ class Builder:
         return name
 
     def warn_unused(self, d: Directive) -> None:
-        self.warn_params(d.params, f'{d.name} "{d.args[0]}"' if d.args else d.name)
-
-    def warn_params(self, params: ParamSet, what: str) -> None:
-        """Parameters nobody read, and earlier copies of a parameter given twice (pbrt-v4 uses the last)."""
-        for p in params.unused():
+        what = f'{d.name} "{d.args[0]}"' if d.args else d.name
+        for p in d.params.unused():
             self.warn(p.loc, f'{what}: parameter "{p.type} {p.name}" is not supported and was ignored')
+        self.warn_shadowed(d.params, what)
+
+    def warn_shadowed(self, params: ParamSet, what: str) -> None:
+        """Earlier copies of a parameter given twice (pbrt-v4 uses the last)."""
         for p in params.shadowed:
             self.warn(p.loc, f'{what}: parameter "{p.name}" is given again later; the later value is used (as pbrt-v4)')
 
@@ -274,7 +275,9 @@ class Builder:
         if kind == "measured":
             self.unsupported("Material", kind, loc)
         self.scene.materials.append(materials.from_pbrt(kind, params, loc, name))
-        self.warn_params(params, f'material "{kind}"')
+        for p in params.unused():
+            self.warn(p.loc, f'parameter "{p.name}" of material "{kind}" is not supported and was ignored')
+        self.warn_shadowed(params, f'material "{kind}"')
         return len(self.scene.materials) - 1
 
     def Material(self, d: Directive) -> None:
