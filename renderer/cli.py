@@ -287,9 +287,14 @@ def main(argv: list[str] | None = None) -> int:
                         f.write("spp,seconds,relmse\n")
                     f.write(f"{s.film.spp},{s.stats.seconds:.4f},{relative_mse(s.image(), ref):.6g}\n")
 
+        full = (0, settings.width, 0, settings.height)
+        # a crop is written as pbrt-v4 writes it: its pixels, placed in the full frame
+        windows = {} if (x0, x1, y0, y1) == full else {"dataWindow": ((x0, y0), (x1 - 1, y1 - 1)),
+                                                       "displayWindow": ((0, 0), (settings.width - 1, settings.height - 1))}
+
         def header(s: RenderSession) -> dict:
             return {**s.stats.header(), "seed": settings.seed, "scene": str(args.scene), "sceneHash": s.fingerprint,
-                    "renderer": "summertime"}
+                    "renderer": "summertime", **windows}
 
         with _StopSignals() as stop:
             try:

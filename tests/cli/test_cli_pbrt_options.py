@@ -31,6 +31,11 @@ def test_command_line_crop_is_the_films_crop_bit_for_bit(tmp_path):
     assert np.array_equal(run(tmp_path, "filter_box.pbrt", "--cropwindow", "0.2,0.7,0.35,0.9"), film)
     assert np.array_equal(run(tmp_path, "filter_box.pbrt", "--cropwindow", "0.2", "0.7", "0.35", "0.9"), film)
     assert np.array_equal(run(tmp_path, "filter_box.pbrt", "--pixelbounds", "13,45,23,58"), film)
+    # written as pbrt-v4 writes a crop: the region's pixels placed in the full frame
+    _, ours = read_exr(tmp_path / "out.exr")
+    _, pbrt = read_exr(DATA / "film_crop.exr")
+    for key in ("dataWindow", "displayWindow"):
+        assert [c.tolist() for c in ours[key]] == [c.tolist() for c in pbrt[key]], key
     # pbrt: a command-line window overrides the Film's
     assert run(tmp_path, "film_crop.pbrt", "--pixelbounds", "0,64,0,64").shape == (64, 64, 3)
 
