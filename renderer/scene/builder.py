@@ -23,7 +23,7 @@ from renderer.scene.parser import Directive
 from renderer.scene.imaging import read_camera, read_film, read_filter
 from renderer.scene.plymesh import ply_mesh
 from renderer.scene.resolve import NamedMaterials, missing_textures, texture_key
-from renderer.scene.shapes import bilinear_mesh, disk, sphere, triangle_mesh
+from renderer.scene.shapes import bilinear_mesh, cylinder, disk, sphere, triangle_mesh
 from renderer.scene.state import GraphicsState, ObjectDefinition, SavedState
 from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, UNSUPPORTED, WORLD_ONLY
 from renderer.scene.texture_params import check_inputs, read_texture
@@ -32,7 +32,7 @@ from renderer.scene.transform import (from_pbrt_matrix, inverse, look_at, read_i
 
 #: Shapes we build, each from its parameters and the Shape directive's location.
 SHAPES: dict[str, Callable[[ParamSet, Location], MeshDesc]] = {
-    "trianglemesh": triangle_mesh, "plymesh": ply_mesh, "sphere": sphere, "disk": disk,
+    "trianglemesh": triangle_mesh, "plymesh": ply_mesh, "sphere": sphere, "disk": disk, "cylinder": cylinder,
     "bilinearmesh": bilinear_mesh,
 }
 

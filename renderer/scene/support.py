@@ -11,7 +11,6 @@ UNSUPPORTED: dict[tuple[str, str], tuple[str, str]] = {
     ("Camera", "realistic"): ("error", "only the perspective camera is implemented"),
     ("Camera", "spherical"): ("error", "only the perspective camera is implemented"),
     ("Shape", "curve"): ("error", "curves are not implemented"),
-    ("Shape", "cylinder"): ("error", "cylinders are not implemented"),
     ("Shape", "loopsubdiv"): ("error", "subdivision surfaces are not implemented"),
     ("Material", "measured"): ("error", "measured BSDFs are not implemented"),
     ("MediumInterface", "*"): ("error", "participating media are not implemented"),
