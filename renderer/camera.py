@@ -1,5 +1,6 @@
-"""pbrt's ``perspective`` camera with a thin lens: fov on the shorter image axis, raster +x to
-the right and +y down, camera space looking down +z with +y up. The camera also carries what the
+"""pbrt's ``perspective`` camera with a thin lens (fov on the shorter image axis) and its
+``orthographic`` one; raster +x to the right and +y down, camera space looking down +z with +y up,
+pbrt's screen window (from the frame aspect ratio, or given). The camera also carries what the
 film does per sample (the pixel filter, the sensor's clamp) and the rendered region: with a crop
 window the kernel's pixels are the region's, offset by ``origin`` into the full image."""
 from __future__ import annotations
@@ -22,6 +23,7 @@ class Camera:
     screen: wp.vec4           # (x min, x max, y min, y max) of the screen window times tan(fov/2)
     lens_radius: float
     focal_distance: float
+    orthographic: int         # 1: rays along +z from the screen point (screen in camera units)
     width: int                # the rendered region's size (the whole image unless cropped)
     height: int
     origin: wp.vec2           # the region's first pixel in the full image
@@ -41,6 +43,8 @@ def generate_ray(cam: Camera, px: float, py: float, u_lens: wp.vec2) -> Ray:
     """The world-space ray through raster point (px, py), refocused through a point on the lens."""
     sx = cam.screen[0] + (cam.screen[1] - cam.screen[0]) * ((px + cam.origin[0]) / cam.full[0])
     sy = cam.screen[3] - (cam.screen[3] - cam.screen[2]) * ((py + cam.origin[1]) / cam.full[1])
+    if cam.orthographic != 0:
+        return _orthographic_ray(cam, sx, sy, u_lens)
     d = wp.normalize(wp.vec3(sx, sy, 1.0))
     o = wp.vec3(0.0)
     if cam.lens_radius > 0.0:
@@ -54,17 +58,39 @@ def generate_ray(cam: Camera, px: float, py: float, u_lens: wp.vec2) -> Ray:
     return r
 
 
+@wp.func
+def _orthographic_ray(cam: Camera, sx: float, sy: float, u_lens: wp.vec2) -> Ray:
+    """pbrt-v4's orthographic ray; with a lens it leaves the lens point (around the camera's
+    origin, as pbrt writes it) towards the screen point's place on the plane of focus."""
+    o = wp.vec3(sx, sy, 0.0)
+    d = wp.vec3(0.0, 0.0, 1.0)
+    if cam.lens_radius > 0.0:
+        lens = concentric_disk(u_lens) * cam.lens_radius
+        focus = o + d * cam.focal_distance
+        o = wp.vec3(lens[0], lens[1], 0.0)
+        d = wp.normalize(focus - o)
+    r = Ray()
+    r.o = wp.transform_point(cam.to_world, o)
+    r.d = wp.normalize(wp.transform_vector(cam.to_world, d))
+    return r
+
+
 def build_camera(desc: CameraDesc, film: FilmDesc, width: int, height: int, device: str) -> tuple[Camera, list]:
     """The camera for a ``width`` x ``height`` image, cropped as the film says; with the arrays it
     points into (keep them alive)."""
     c = Camera()
     c.to_world = wp.mat44(*np.asarray(desc.camera_to_world, dtype=np.float32).ravel())
-    aspect = width / height
-    t = math.tan(math.radians(desc.fov_deg) / 2.0)
-    if aspect >= 1.0:
+    aspect = desc.frame_aspect or width / height
+    ortho = desc.projection == "orthographic"
+    t = 1.0 if ortho else math.tan(math.radians(desc.fov_deg) / 2.0)
+    if desc.screen_window is not None:
+        x0, x1, y0, y1 = desc.screen_window
+        c.screen = wp.vec4(x0 * t, x1 * t, y0 * t, y1 * t)
+    elif aspect >= 1.0:
         c.screen = wp.vec4(-aspect * t, aspect * t, -t, t)
     else:
         c.screen = wp.vec4(-t, t, -t / aspect, t / aspect)
+    c.orthographic = int(ortho)
     c.lens_radius = float(desc.lens_radius)
     c.focal_distance = float(desc.focal_distance)
     x0, x1, y0, y1 = film_region(film, width, height)

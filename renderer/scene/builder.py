@@ -186,11 +186,11 @@ class Builder:
 
     def Camera(self, d: Directive) -> None:
         name = self.check_known(d)
-        if name != "perspective":
+        if name not in ("perspective", "orthographic"):
             self.unsupported(d.name, name, d.loc)
         world_from_camera = inverse(self.state.ctm, "Camera", d.loc)
         self.named_coordinate_systems["camera"] = world_from_camera
-        self.scene.camera = read_camera(d.params, world_from_camera, d.loc)
+        self.scene.camera = read_camera(name, d.params, world_from_camera, d.loc)
         self.warn_unused(d)
 
     def Film(self, d: Directive) -> None:

@@ -18,11 +18,18 @@ from renderer.settings import check_resolution
 FILTER_RADIUS = {"box": 0.5, "gaussian": 1.5, "mitchell": 2.0, "sinc": 4.0, "triangle": 2.0}
 
 
-def read_camera(p: ParamSet, world_from_camera: np.ndarray, loc: Location) -> CameraDesc:
-    """The perspective camera; the shutter interval is the exposure time of pbrt's imaging ratio."""
-    fov = p.float("fov", 90.0)
+def read_camera(name: str, p: ParamSet, world_from_camera: np.ndarray, loc: Location) -> CameraDesc:
+    """The perspective or orthographic camera; the shutter interval is the exposure time of pbrt's
+    imaging ratio."""
+    fov = p.float("fov", 90.0) if name == "perspective" else 90.0
     if not 0.0 < fov < 180.0:
         raise SceneError(f'Camera: "fov" must be between 0 and 180 degrees, got {fov}', p.get("fov").loc)
+    frame = p.float("frameaspectratio")
+    if frame is not None and not frame > 0.0:
+        raise SceneError(f'Camera: "frameaspectratio" must be > 0, got {frame}', loc)
+    window = p.floats("screenwindow")
+    if window is not None and (len(window) != 4 or window[0] >= window[1] or window[2] >= window[3]):
+        raise SceneError('Camera: "screenwindow" needs 4 values x0 < x1, y0 < y1', p.params["screenwindow"].loc)
     lens_radius = p.float("lensradius", 0.0, min=0.0)
     focal_distance = p.float("focaldistance", 1e6)
     if focal_distance <= 0.0:
@@ -30,7 +37,8 @@ def read_camera(p: ParamSet, world_from_camera: np.ndarray, loc: Location) -> Ca
     exposure = abs(p.float("shutterclose", 1.0) - p.float("shutteropen", 0.0))   # pbrt swaps them if reversed
     if exposure <= 0.0:
         raise SceneError("Camera: the shutter times imply that the shutter does not open (a black image)", loc)
-    return CameraDesc(world_from_camera, fov, lens_radius, focal_distance, exposure)
+    return CameraDesc(world_from_camera, fov, lens_radius, focal_distance, exposure, name, frame,
+                      None if window is None else tuple(float(v) for v in window))
 
 
 def read_film(p: ParamSet, loc: Location, warn: Callable[[Location, str], None]) -> FilmDesc:

@@ -158,3 +158,19 @@ def test_cylinders_match_pbrt(tmp_path):
     (tmp_path / "closed.pbrt").write_text(closed.read_text().replace('"float phimax" 250', ""))
     img, var = ours(load_scene(tmp_path / "closed.pbrt"))
     assert chi(img, var, ref, ref_var) > DISTINCT
+
+
+@pytest.mark.parametrize("name", ["camera_ortho", "camera_ortho_lens"])
+def test_orthographic_camera_matches_pbrt(tmp_path, name):
+    """The orthographic camera with pbrt's default screen window, and with a given one and a thin
+    lens (whose rays pbrt starts at the lens point about the camera's origin); without the lens
+    the second no longer matches."""
+    img, var = ours_of(name)
+    ref, ref_var = reference(name)
+    assert chi(img, var, ref, ref_var) < CHI
+    np.testing.assert_allclose(img.mean((0, 1)), ref.mean((0, 1)), rtol=MEAN_TOL)
+    if name == "camera_ortho_lens":
+        text = (DATA / f"{name}.pbrt").read_text().replace('"float lensradius" 0.08', "")
+        (tmp_path / "pinhole.pbrt").write_text(text)
+        pin, pin_var = ours(load_scene(tmp_path / "pinhole.pbrt"))
+        assert chi(pin, pin_var, ref, ref_var) > DISTINCT
