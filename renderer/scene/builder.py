@@ -186,7 +186,7 @@ class Builder:
 
     def Camera(self, d: Directive) -> None:
         name = self.check_known(d)
-        if name not in ("perspective", "orthographic"):
+        if name == "realistic":
             self.unsupported(d.name, name, d.loc)
         world_from_camera = inverse(self.state.ctm, "Camera", d.loc)
         self.named_coordinate_systems["camera"] = world_from_camera

@@ -30,7 +30,7 @@ class CameraDesc:
     lens_radius: float = 0.0
     focal_distance: float = 1e6
     exposure_time: float = 1.0           # shutterclose - shutteropen: scales the image (pbrt's imaging ratio)
-    projection: str = "perspective"      # or "orthographic"
+    projection: str = "perspective"      # "orthographic", "spherical equalarea", "spherical equirectangular"
     frame_aspect: float | None = None    # pbrt's frameaspectratio (None: the film's)
     screen_window: tuple[float, float, float, float] | None = None   # x0, x1, y0, y1 (None: from the aspect)
 

@@ -19,8 +19,8 @@ FILTER_RADIUS = {"box": 0.5, "gaussian": 1.5, "mitchell": 2.0, "sinc": 4.0, "tri
 
 
 def read_camera(name: str, p: ParamSet, world_from_camera: np.ndarray, loc: Location) -> CameraDesc:
-    """The perspective or orthographic camera; the shutter interval is the exposure time of pbrt's
-    imaging ratio."""
+    """The perspective, orthographic or spherical camera; the shutter interval is the exposure time
+    of pbrt's imaging ratio."""
     fov = p.float("fov", 90.0) if name == "perspective" else 90.0
     if not 0.0 < fov < 180.0:
         raise SceneError(f'Camera: "fov" must be between 0 and 180 degrees, got {fov}', p.get("fov").loc)
@@ -37,7 +37,14 @@ def read_camera(name: str, p: ParamSet, world_from_camera: np.ndarray, loc: Loca
     exposure = abs(p.float("shutterclose", 1.0) - p.float("shutteropen", 0.0))   # pbrt swaps them if reversed
     if exposure <= 0.0:
         raise SceneError("Camera: the shutter times imply that the shutter does not open (a black image)", loc)
-    return CameraDesc(world_from_camera, fov, lens_radius, focal_distance, exposure, name, frame,
+    projection = name
+    if name == "spherical":
+        mapping = p.string("mapping", "equalarea")
+        if mapping not in ("equalarea", "equirectangular"):
+            raise SceneError(f'Camera "spherical": mapping must be "equalarea" or "equirectangular", got '
+                             f'"{mapping}"', p.params["mapping"].loc)
+        projection = f"spherical {mapping}"
+    return CameraDesc(world_from_camera, fov, lens_radius, focal_distance, exposure, projection, frame,
                       None if window is None else tuple(float(v) for v in window))
 
 

@@ -7,8 +7,7 @@ from __future__ import annotations
 #: change the picture badly. ``"*"`` stands for any name not listed (or for a directive without
 #: a name). Parameters of supported directives that are not implemented (or misspelt) always warn.
 UNSUPPORTED: dict[tuple[str, str], tuple[str, str]] = {
-    ("Camera", "realistic"): ("error", "only the perspective and orthographic cameras are implemented"),
-    ("Camera", "spherical"): ("error", "only the perspective and orthographic cameras are implemented"),
+    ("Camera", "realistic"): ("error", "the realistic camera (lens systems) is not implemented"),
     ("Shape", "curve"): ("error", "curves are not implemented"),
     ("Shape", "loopsubdiv"): ("error", "subdivision surfaces are not implemented"),
     ("Material", "measured"): ("error", "measured BSDFs are not implemented"),

@@ -174,3 +174,19 @@ def test_orthographic_camera_matches_pbrt(tmp_path, name):
         (tmp_path / "pinhole.pbrt").write_text(text)
         pin, pin_var = ours(load_scene(tmp_path / "pinhole.pbrt"))
         assert chi(pin, pin_var, ref, ref_var) > DISTINCT
+
+
+@pytest.mark.parametrize("name", ["camera_spherical", "camera_equirect"])
+def test_spherical_camera_matches_pbrt(tmp_path, name):
+    """pbrt-v4's spherical camera, equal-area (its default) and equirectangular; each image fails
+    against the other mapping's scene."""
+    img, var = ours_of(name)
+    ref, ref_var = reference(name)
+    assert chi(img, var, ref, ref_var) < CHI
+    np.testing.assert_allclose(img.mean((0, 1)), ref.mean((0, 1)), rtol=MEAN_TOL)
+    if name == "camera_spherical":
+        text = (DATA / f"{name}.pbrt").read_text().replace('Camera "spherical"',
+                                                           'Camera "spherical" "string mapping" "equirectangular"')
+        (tmp_path / "equirect.pbrt").write_text(text)
+        other, other_var = ours(load_scene(tmp_path / "equirect.pbrt"))
+        assert chi(other, other_var, ref, ref_var) > DISTINCT

@@ -254,7 +254,7 @@ def test_defaults_without_options(tmp_path):
 
 @pytest.mark.parametrize("text, line, match", [
     ('Camera "perspective" "float fov" 180\nWorldBegin', 1, "fov"),
-    ('\nCamera "spherical"\nWorldBegin', 2, 'Camera "spherical" is not supported'),
+    ('\nCamera "realistic"\nWorldBegin', 2, 'Camera "realistic" is not supported'),
     ('Camera "pinhole"\nWorldBegin', 1, 'unknown Camera "pinhole"'),
     ('Scale 0 1 1\nCamera "perspective"\nWorldBegin', 2, "singular"),
     ('LookAt 0 0 0  0 1 0  0 1 0\nWorldBegin', 1, "parallel"),
