@@ -25,10 +25,11 @@ from renderer.scene.plymesh import ply_mesh
 from renderer.scene.resolve import NamedMaterials, missing_textures, texture_key
 from renderer.scene.shapes import bilinear_mesh, cylinder, disk, sphere, triangle_mesh
 from renderer.scene.state import GraphicsState, ObjectDefinition, SavedState
-from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, UNSUPPORTED, WORLD_ONLY
+from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, PBRT_V3_NAMES, UNSUPPORTED, WORLD_ONLY
 from renderer.scene.texture_params import check_inputs, read_texture
-from renderer.scene.transform import (from_pbrt_matrix, inverse, look_at, read_instance_transforms, rotate, scale,
-                                      swaps_handedness, transformed_mesh, translate)
+from renderer.scene.transform import (check_single_precision, from_pbrt_matrix, inverse, look_at,
+                                      read_instance_transforms, rotate, scale, swaps_handedness, transformed_mesh,
+                                      translate)
 
 #: Shapes we build, each from its parameters and the Shape directive's location.
 SHAPES: dict[str, Callable[[ParamSet, Location], MeshDesc]] = {
@@ -97,9 +98,8 @@ class Builder:
             raise SceneError(f"{s.kind} is never closed", s.loc)
         if not lights.has_lights(self.scene):
             self.scene.warnings.append(f"{self.source}: scene has no lights: the image will be black")
-        errors = self.named_materials.resolve(self.scene, self._current_material(None)) if any(
-            s.material < 0 for s in self.scene.shapes) else []
-        return errors + missing_textures(self.scene, self.refused_textures)
+        unresolved = self.named_materials.resolve(self.scene, lambda: self._current_material(None))
+        return unresolved + missing_textures(self.scene, self.refused_textures)
 
     # -- reporting
 
@@ -116,6 +116,10 @@ class Builder:
 
     def check_known(self, d: Directive) -> str:
         name = str(d.args[0])
+        if (d.name, name) in PBRT_V3_NAMES:
+            self.warn(d.loc, f'{d.name} "{name}" is pbrt-v3\'s; read as --upgrade writes it, '
+                             f'{PBRT_V3_NAMES[d.name, name]}')
+            return name
         if name not in KNOWN_NAMES[d.name]:
             known = ", ".join(sorted(KNOWN_NAMES[d.name]))
             raise UnsupportedError(f'unknown {d.name} "{name}" (pbrt-v4 knows {known})', d.loc)
@@ -195,7 +199,7 @@ class Builder:
 
     def Film(self, d: Directive) -> None:
         name = self.check_known(d)
-        if name != "rgb":
+        if name not in ("rgb", "image"):
             self.unsupported(d.name, name, d.loc)
         self.scene.film = replace(read_film(d.params, d.loc, self.warn), filter=self.scene.film.filter)
         self.warn_unused(d)
@@ -221,7 +225,7 @@ class Builder:
         self.warn_unused(d)
 
     def PixelFilter(self, d: Directive) -> None:
-        self.scene.film.filter = read_filter(self.check_known(d), d.params, d.loc)
+        self.scene.film.filter = read_filter(self.check_known(d), d.params, d.loc, self.warn)
         self.warn_unused(d)
 
     def Accelerator(self, d: Directive) -> None:
@@ -357,7 +361,7 @@ class Builder:
             return
         ctm = self.state.ctm
         inverse(ctm, f'Shape "{name}"', d.loc)
-        self._check_single_precision(mesh, ctm, name, d.loc)
+        check_single_precision(mesh, ctm, name, d.loc)
         obj = self.current_object
         if obj is not None:
             if self.state.area_light is not None:
@@ -374,17 +378,6 @@ class Builder:
             obj.shapes.append(index)
         else:
             self.scene.instance_sets.append(InstanceSetDesc([index], ctm[None].copy(), d.loc))
-
-    @staticmethod
-    def _check_single_precision(mesh: MeshDesc, ctm: np.ndarray, name: str, loc: Location) -> None:
-        """The device works in float32: a shape placed beyond its range would silently vanish."""
-        lo, hi = mesh.positions.min(axis=0), mesh.positions.max(axis=0)
-        corners = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
-        with np.errstate(over="ignore", invalid="ignore"):
-            world = (corners @ ctm.T).astype(np.float32)
-        if not np.all(np.isfinite(world)):
-            raise SceneError(f'Shape "{name}": its world-space position is beyond single precision (float32) '
-                             "range", loc)
 
     def ObjectBegin(self, d: Directive) -> None:
         """Like pbrt-v4, ObjectBegin also saves the graphics state, which ObjectEnd restores."""

@@ -37,7 +37,7 @@ def read_camera(name: str, p: ParamSet, world_from_camera: np.ndarray, loc: Loca
     exposure = abs(p.float("shutterclose", 1.0) - p.float("shutteropen", 0.0))   # pbrt swaps them if reversed
     if exposure <= 0.0:
         raise SceneError("Camera: the shutter times imply that the shutter does not open (a black image)", loc)
-    projection = name
+    projection = "spherical equirectangular" if name == "environment" else name    # pbrt-v3's name for it
     if name == "spherical":
         mapping = p.string("mapping", "equalarea")
         if mapping not in ("equalarea", "equirectangular"):
@@ -119,15 +119,24 @@ def _bounds(p: ParamSet, name: str, kind: str, loc: Location) -> tuple | None:
     return tuple(float(v) for v in values)
 
 
-def read_filter(kind: str, p: ParamSet, loc: Location) -> FilterDesc:
+def read_filter(kind: str, p: ParamSet, loc: Location, warn: Callable[[Location, str], None]) -> FilterDesc:
     """pbrt-v4's five filters with its parameter names and defaults."""
     r = FILTER_RADIUS[kind]
+    for v3, v4 in (("xwidth", "xradius"), ("ywidth", "yradius")):      # pbrt-v3's names, as --upgrade renames
+        if v3 in p and v4 not in p:
+            p.params[v4] = p.params.pop(v3)
+            warn(p.params[v4].loc, f'PixelFilter: "{v3}" is pbrt-v3\'s; read as "{v4}"')
     radius = (p.float("xradius", r), p.float("yradius", r))
     if not all(0.0 < v <= 16.0 for v in radius):
         raise SceneError(f'PixelFilter "{kind}": radii must be in (0, 16], got {radius}', loc)
     f = FilterDesc(kind, radius)
     if kind == "gaussian":
-        f.sigma = p.float("sigma", 0.5)
+        alpha = p.float("alpha") if "sigma" not in p else None              # pbrt-v3's falloff
+        if alpha is not None:
+            if not alpha > 0.0:
+                raise SceneError(f'PixelFilter "gaussian": "alpha" must be > 0, got {alpha}', loc)
+            warn(p.params["alpha"].loc, 'PixelFilter: "alpha" is pbrt-v3\'s; read as "sigma" = 1 / sqrt(2 alpha)')
+        f.sigma = p.float("sigma", 0.5) if alpha is None else 1.0 / math.sqrt(2.0 * alpha)
         if f.sigma <= 0.0:
             raise SceneError(f'PixelFilter "gaussian": "sigma" must be > 0, got {f.sigma}', loc)
     elif kind == "mitchell":

@@ -6,6 +6,7 @@ made while their named material is still unknown carry a placeholder (a negative
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from typing import Callable
 
 from renderer.errors import Location, SceneError
 from renderer.parameters import TextureRef
@@ -36,9 +37,9 @@ class NamedMaterials:
         self.pending.append((name, loc))
         return -len(self.pending)
 
-    def resolve(self, scene: SceneDescription, default_material: int) -> list[SceneError]:
+    def resolve(self, scene: SceneDescription, default_material: Callable[[], int]) -> list[SceneError]:
         """Replace every placeholder; a name never defined is an error at the shape that used it
-        (pbrt-v4: "no named material defined"), a refused one falls back to ``default_material``."""
+        (pbrt-v4: "no named material defined"), a refused one falls back to ``default_material()``."""
         errors: list[SceneError] = []
         for i, s in enumerate(scene.shapes):
             if s.material >= 0:
@@ -50,7 +51,7 @@ class NamedMaterials:
             if name not in self.refused:
                 errors.append(SceneError(f'no material named "{name}" (NamedMaterial at {loc}; no '
                                          'MakeNamedMaterial defines it anywhere in the scene)', s.loc))
-            scene.shapes[i] = replace(s, material=default_material)
+            scene.shapes[i] = replace(s, material=default_material())
         return errors
 
 

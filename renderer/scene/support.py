@@ -40,6 +40,9 @@ KNOWN_NAMES: dict[str, frozenset[str]] = {
                         "loopsubdiv"}),
 }
 
+#: pbrt-v3 names that pbrt-v4's --upgrade rewrites, read (with a warning) as what it writes.
+PBRT_V3_NAMES = {("Film", "image"): '"rgb"', ("Camera", "environment"): '"spherical" "string mapping" "equirectangular"'}
+
 #: As in pbrt-v4: rendering options come before WorldBegin, scene contents after it.
 OPTIONS_ONLY = frozenset({"Camera", "Film", "Sampler", "Integrator", "PixelFilter", "Accelerator"})
 WORLD_ONLY = frozenset({"AttributeBegin", "AttributeEnd", "Attribute", "Shape", "ReverseOrientation", "ObjectBegin",

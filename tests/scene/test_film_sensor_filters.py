@@ -142,3 +142,14 @@ def test_sensor_output_is_the_identity_by_default_and_scales_by_the_imaging_rati
     assert np.array_equal(sensor_output(img, FilmDesc(), cam), img)
     cam.exposure_time = 0.5
     np.testing.assert_array_equal(sensor_output(img, FilmDesc(iso=400.0), cam), img * np.float32(2.0))
+
+
+def test_pbrt_v3_film_camera_and_filter_names_read_as_upgrade_writes_them(tmp_path):
+    s = load_description(_write(tmp_path, 'Camera "environment"\nPixelFilter "gaussian" "float xwidth" 2 '
+                                          '"float ywidth" 1 "float alpha" 2\nFilm "image"\nWorldBegin\n'))
+    assert s.camera.projection == "spherical equirectangular"
+    assert s.film.filter == FilterDesc("gaussian", (2.0, 1.0), sigma=0.5)        # 1 / sqrt(2 x 2)
+    text = "\n".join(s.warnings)
+    for part in ('Camera "environment" is pbrt-v3', 'Film "image" is pbrt-v3', '"xwidth" is pbrt-v3',
+                 '"alpha" is pbrt-v3'):
+        assert part in text, text
