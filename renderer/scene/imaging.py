@@ -14,6 +14,10 @@ from renderer.scene.description import CameraDesc, FilmDesc, FilterDesc
 from renderer.scene.params import ParamSet
 from renderer.settings import check_resolution
 
+#: Bounds on the imaging ratio's factors, far beyond any camera: with both at their limit the
+#: ratio is 1e13, so a sane radiance stays far inside float32.
+MAX_ISO = 1e9
+MAX_EXPOSURE_TIME = 1e6
 #: pbrt-v4's filters and their default radius (both axes).
 FILTER_RADIUS = {"box": 0.5, "gaussian": 1.5, "mitchell": 2.0, "sinc": 4.0, "triangle": 2.0}
 
@@ -37,6 +41,9 @@ def read_camera(name: str, p: ParamSet, world_from_camera: np.ndarray, loc: Loca
     exposure = abs(p.float("shutterclose", 1.0) - p.float("shutteropen", 0.0))   # pbrt swaps them if reversed
     if exposure <= 0.0:
         raise SceneError("Camera: the shutter times imply that the shutter does not open (a black image)", loc)
+    if exposure > MAX_EXPOSURE_TIME:
+        raise SceneError(f"Camera: an exposure (shutterclose - shutteropen) of {exposure:g} s is beyond "
+                         f"{MAX_EXPOSURE_TIME:g} s: the image would overflow", loc)
     projection = "spherical equirectangular" if name == "environment" else name    # pbrt-v3's name for it
     if name == "spherical":
         mapping = p.string("mapping", "equalarea")
@@ -55,10 +62,10 @@ def read_film(p: ParamSet, loc: Location, warn: Callable[[Location, str], None])
         check_resolution(film.width, film.height)
     except RenderError as e:
         raise SceneError(f"Film: {e}", loc) from None
-    film.iso = p.float("iso", 100.0, min=0.0)
+    film.iso = p.float("iso", 100.0, min=0.0, max=MAX_ISO)
     legacy = p.get("scale")
     if legacy is not None:
-        film.iso = 100.0 * p.float("scale", min=0.0)
+        film.iso = 100.0 * p.float("scale", min=0.0, max=MAX_ISO / 100.0)
         warn(legacy.loc, 'Film: "scale" is pbrt-v3\'s; read as pbrt-v4\'s --upgrade does, "iso" = 100 x scale')
     film.max_component_value = p.float("maxcomponentvalue", float("inf"), min=0.0)
     legacy = p.get("maxsampleluminance")

@@ -153,3 +153,13 @@ def test_pbrt_v3_film_camera_and_filter_names_read_as_upgrade_writes_them(tmp_pa
     for part in ('Camera "environment" is pbrt-v3', 'Film "image" is pbrt-v3', '"xwidth" is pbrt-v3',
                  '"alpha" is pbrt-v3'):
         assert part in text, text
+
+
+@pytest.mark.parametrize("text, match", [
+    ('Film "rgb" "float iso" 1e30\nWorldBegin\n', '"iso" must be <='),
+    ('Film "rgb" "float scale" 1e30\nWorldBegin\n', '"scale" must be <='),
+    ('Camera "perspective" "float shutterclose" 1e30\nWorldBegin\n', "would overflow"),
+])
+def test_an_imaging_ratio_that_would_overflow_is_refused(tmp_path, text, match):
+    with pytest.raises(SceneError, match=match):
+        load_description(_write(tmp_path, text))
