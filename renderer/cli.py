@@ -104,7 +104,8 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--resume", type=Path, metavar="PATH", help="continue from this checkpoint")
     g.add_argument("--write-partial-every", type=float, metavar="SECONDS", help="keep the output image current")
     g.add_argument("--write-partial-images", action="store_true",
-                   help=f"as pbrt-v4: write the image periodically (every {PARTIAL_EVERY:g} s unless --write-partial-every)")
+                   help=f"as pbrt-v4: write the image periodically (every {PARTIAL_EVERY:g} s, or as "
+                        "--write-partial-every says)")
     g.add_argument("--aov", type=_aov_list, default=(), metavar="LIST",
                    help="extra EXR layers: albedo,normal,depth")
     g.add_argument("--denoise", action="store_true", help="denoise with Intel OIDN (pip install '.[denoise]')")
@@ -289,8 +290,8 @@ def main(argv: list[str] | None = None) -> int:
 
         full = (0, settings.width, 0, settings.height)
         # a crop is written as pbrt-v4 writes it: its pixels, placed in the full frame
-        windows = {} if (x0, x1, y0, y1) == full else {"dataWindow": ((x0, y0), (x1 - 1, y1 - 1)),
-                                                       "displayWindow": ((0, 0), (settings.width - 1, settings.height - 1))}
+        windows = {} if (x0, x1, y0, y1) == full else {
+            "dataWindow": ((x0, y0), (x1 - 1, y1 - 1)), "displayWindow": ((0, 0), (settings.width - 1, settings.height - 1))}
 
         def header(s: RenderSession) -> dict:
             return {**s.stats.header(), "seed": settings.seed, "scene": str(args.scene), "sceneHash": s.fingerprint,

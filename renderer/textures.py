@@ -173,10 +173,14 @@ class TextureTable:
             if invert_scale is not None:
                 rgb = np.maximum(0.0, 1.0 - invert_scale * rgb)
             h, w = rgb.shape[:2]
-            self._image_cache[key] = (self.n_pixels, w, h)
-            self.pixels.append(np.ascontiguousarray(rgb.reshape(-1, 3), dtype=np.float32))
-            self.n_pixels += w * h
+            self._image_cache[key] = (self._add_pixels(rgb.reshape(-1, 3)), w, h)
         return self._image_cache[key]
+
+    def _add_pixels(self, rgb: np.ndarray) -> int:
+        """Append (N, 3) texels to the pool; their offset."""
+        self.pixels.append(np.ascontiguousarray(rgb, dtype=np.float32))
+        self.n_pixels += len(rgb)
+        return self.n_pixels - len(rgb)
 
     def add_described(self, desc: TextureDesc, textures: dict[str, TextureDesc]) -> int:
         """Add a named texture from the scene (memoised, so materials sharing it share one record)."""
@@ -190,6 +194,10 @@ class TextureTable:
             off, w, h = self._load_image(spec.path, spec.encoding, desc.loc, spec.value if spec.invert else None)
             tid = self._add(IMAGE, 1.0 if spec.invert else spec.value, uvmap=spec.uvmap,
                             image=(off, w, h, WRAP[spec.wrap]), **self._mapped(spec))
+        elif spec.kind == "bilerp":                # a 2x2 image: rows t = 1 (v01, v11), t = 0 (v00, v10)
+            v00, v01, v10, v11 = spec.corners
+            off = self._add_pixels(np.stack([v01, v11, v00, v10]))
+            tid = self._add(IMAGE, 1.0, uvmap=spec.uvmap, image=(off, 2, 2, WRAP["clamp"]), **self._mapped(spec))
         elif spec.kind == "checkerboard":
             tid = self._add(CHECKERBOARD, spec.value, alt=spec.alt, uvmap=spec.uvmap, **self._mapped(spec))
         elif spec.kind in ("mix", "directionmix", "product"):

@@ -39,6 +39,7 @@ class TextureSpec:
     #: rows are pbrt's v1 and v2 applied after that transform (s, t = row . (p, 1) + udelta, vdelta)
     xform: tuple[float, ...] = tuple(np.eye(4).ravel())
     invert: bool = False                             # imagemap: 1 - value, clamped at 0
+    corners: tuple | None = None                     # bilerp: v00, v01, v10, v11
     #: mix: (tex1, tex2, amount); directionmix: (tex1, tex2); product (a scale of two textures):
     #: (tex, scale). Each a texture's name or a constant.
     inputs: tuple = ()
@@ -68,6 +69,8 @@ def read_texture(desc: TextureDesc) -> TextureSpec:
     if desc.kind in ("mix", "directionmix"):
         return _mix(desc)
     mapped = _mapping(desc, where)
+    if desc.kind == "bilerp":
+        return _bilerp(desc, where, mapped, const)
     if desc.kind == "checkerboard":
         if p.int("dimension", 2) != 2:
             raise UnsupportedError(f"{where}: only 2D checkerboard textures are supported", desc.loc)
@@ -151,6 +154,26 @@ def check_inputs(spec: TextureSpec, desc: TextureDesc, textures: dict[str, Textu
     if nested:
         raise UnsupportedError(f'Texture "{desc.name}": its input "{nested[0]}" is itself a mix, directionmix or '
                                "scale of two textures; one level of these is supported", desc.loc)
+
+
+def _bilerp(desc: TextureDesc, where: str, mapped: TextureSpec, const) -> TextureSpec:
+    """pbrt's bilerp, (1-s)(1-t) v00 + (1-s) t v01 + s (1-t) v10 + s t v11, made a 2x2 image whose
+    texel centres sit at s, t = 0 and 1 (the mapping is narrowed to them): the device's bilinear
+    lookup is then the same function on [0, 1]^2. Outside it the image clamps where pbrt's formula
+    extrapolates. Spherical and cylindrical coordinates lie in [0, 1] anyway but cannot be
+    narrowed here, so they are refused."""
+    if mapped.mapping in ("spherical", "cylindrical"):
+        raise UnsupportedError(f'{where}: bilerp with the "{mapped.mapping}" mapping is not supported', desc.loc)
+    corners = tuple(np.broadcast_to(np.asarray(const(k, 0.0), dtype=np.float64), (3,))
+                    for k in ("v00", "v01", "v10", "v11"))
+    su, sv, du, dv = mapped.uvmap
+    uvmap = (0.5 * su, 0.5 * sv, 0.25 + 0.5 * du, 0.25 + 0.5 * dv)
+    xform = mapped.xform
+    if mapped.mapping == "planar":                         # st = rows . p + delta: narrow the rows too
+        m = np.asarray(xform).reshape(4, 4).copy()
+        m[:2] *= 0.5
+        xform = tuple(float(x) for x in m.ravel())
+    return replace(mapped, kind="bilerp", value=1.0, uvmap=uvmap, xform=xform, corners=corners, wrap="clamp")
 
 
 def _mix(desc: TextureDesc) -> TextureSpec:

@@ -190,3 +190,17 @@ def test_spherical_camera_matches_pbrt(tmp_path, name):
         (tmp_path / "equirect.pbrt").write_text(text)
         other, other_var = ours(load_scene(tmp_path / "equirect.pbrt"))
         assert chi(other, other_var, ref, ref_var) > DISTINCT
+
+
+def test_bilerp_texture_matches_pbrt(tmp_path):
+    """texture_bilerp.pbrt: bilerp with uv and planar mappings and as a mix's amount; with two
+    corners swapped it no longer matches."""
+    img, var = ours_of("texture_bilerp")
+    ref, ref_var = reference("texture_bilerp")
+    assert chi(img, var, ref, ref_var) < CHI
+    np.testing.assert_allclose(img.mean((0, 1)), ref.mean((0, 1)), rtol=MEAN_TOL)
+    text = (DATA / "texture_bilerp.pbrt").read_text().replace('"rgb v00" [0.05 0.05 0.05] "rgb v01" [0.9 0.9 0.9]',
+                                                               '"rgb v00" [0.9 0.9 0.9] "rgb v01" [0.05 0.05 0.05]')
+    (tmp_path / "swapped.pbrt").write_text(text)
+    other, other_var = ours(load_scene(tmp_path / "swapped.pbrt"))
+    assert chi(other, other_var, ref, ref_var) > DISTINCT
