@@ -15,8 +15,9 @@ import traceback
 import warnings
 from pathlib import Path
 
-
 EXIT_OK, EXIT_BAD_INPUT, EXIT_BAD_SAMPLES = 0, 2, 3
+#: --write-partial-images: how often the image is rewritten, in seconds.
+PARTIAL_EVERY = 60.0
 
 
 def _resolution(text: str) -> tuple[int, int]:
@@ -47,6 +48,20 @@ def _exposure(text: str) -> float:
         raise argparse.ArgumentTypeError(f"exposure must be between -{MAX_EXPOSURE:g} and {MAX_EXPOSURE:g} stops, "
                                          f"got {text!r}")
     return v
+
+
+def _four_numbers(words: list[str], kind: type, what: str) -> tuple:
+    """pbrt's ``x0,x1,y0,y1`` (commas or spaces: ``--cropwindow 0 .5 0 .5`` too)."""
+    from renderer.errors import RenderError
+
+    parts = [w for word in words for w in word.replace(",", " ").split()]
+    try:
+        values = tuple(kind(v) for v in parts)
+    except ValueError:
+        raise RenderError(f"{what} must be 4 numbers x0,x1,y0,y1, got {' '.join(words)!r}") from None
+    if len(values) != 4:
+        raise RenderError(f"{what} must be 4 numbers x0,x1,y0,y1, got {len(values)}")
+    return values
 
 
 def _aov_list(text: str) -> tuple[str, ...]:
@@ -95,6 +110,11 @@ def build_parser() -> argparse.ArgumentParser:
                    "memory than this (default: this machine's memory)")
     p.add_argument("--no-nee", action="store_true", help="BSDF sampling only (no light sampling): for checks")
     p.add_argument("--rr-depth", type=int, help="Russian roulette from this path depth on (default 4; -1: off)")
+    p.add_argument("--cropwindow", nargs="+", metavar="X0,X1,Y0,Y1",
+                   help="render only this part of the image, as fractions in [0, 1] (as pbrt-v4; overrides the Film's)")
+    p.add_argument("--pixelbounds", nargs="+", metavar="X0,X1,Y0,Y1",
+                   help="render only these pixels, ends exclusive (as pbrt-v4; overrides the Film's)")
+    p.add_argument("--quick", action="store_true", help="as pbrt-v4: a quarter of the resolution and 1 spp")
     p.add_argument("--thin-film", metavar="MODE", help="thinfilm colour: rgb3 (the seed's 3 wavelengths) or "
                    "spectral:N (N jittered wavelengths; default spectral:32)")
     g = p.add_argument_group("long renders")
@@ -104,6 +124,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="checkpoint interval (default: 300); a checkpoint is also written at the end")
     g.add_argument("--resume", type=Path, metavar="PATH", help="continue from this checkpoint")
     g.add_argument("--write-partial-every", type=float, metavar="SECONDS", help="keep the output image current")
+    g.add_argument("--write-partial-images", action="store_true",
+                   help=f"as pbrt-v4: write the image periodically (every {PARTIAL_EVERY:g} s, or as "
+                        "--write-partial-every says)")
     g.add_argument("--aov", type=_aov_list, default=(), metavar="LIST",
                    help="extra EXR layers: albedo,normal,depth")
     g.add_argument("--denoise", action="store_true", help="denoise with Intel OIDN (pip install '.[denoise]')")
@@ -220,6 +243,23 @@ def write_outputs(path: Path, img, layers: dict, exposure: float, header: dict) 
         write_png(path, img, exposure)
 
 
+def _apply_region(scene, args: argparse.Namespace):
+    """pbrt-v4's precedence: --cropwindow, then --pixelbounds, then the Film's crop window, then its
+    pixel bounds. Returns the rule giving the rendered region at a resolution (errors if empty)."""
+    from renderer.errors import RenderError
+    from renderer.scene.imaging import film_region
+
+    if args.cropwindow:
+        crop = _four_numbers(args.cropwindow, float, "--cropwindow")
+        if not all(0.0 <= v <= 1.0 for v in crop) or crop[0] >= crop[1] or crop[2] >= crop[3]:
+            raise RenderError(f"--cropwindow must be x0 < x1, y0 < y1 in [0, 1], got {crop}")
+        scene.film.crop_window, scene.film.pixel_bounds = crop, None
+    elif args.pixelbounds:
+        scene.film.pixel_bounds = _four_numbers(args.pixelbounds, int, "--pixelbounds")
+        scene.film.crop_window = None
+    return lambda width, height: film_region(scene.film, width, height)
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     # colour-science warns at import that matplotlib (plotting, unused here) is missing: the user
@@ -263,16 +303,21 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
     if args.error_log and not args.reference:
         raise RenderError("--error-log needs --reference REF.exr")
     w, h = args.res or (None, None)
+    region = _apply_region(scene, args)
+    if args.quick:          # pbrt-v4's --quick: resolution / 4 and one sample per pixel
+        w, h = max(1, (w or scene.film.width) // 4), max(1, (h or scene.film.height) // 4)
+        args.spp = 1
     settings = settings_for(scene, seed=args.seed, width=w, height=h, max_depth=args.max_depth, nee=not args.no_nee,
                             rr_depth=args.rr_depth, thin_film=args.thin_film)
+    x0, x1, y0, y1 = region(settings.width, settings.height)       # an empty region fails here
     ref = None
     if args.reference:
         from renderer.io.images import read_image
 
         ref = read_image(args.reference)[..., :3]
-        if ref.shape[:2] != (settings.height, settings.width):
+        if ref.shape[:2] != (y1 - y0, x1 - x0):
             raise RenderError(f"reference {args.reference} is {ref.shape[1]}x{ref.shape[0]}, "
-                              f"not {settings.width}x{settings.height}")
+                              f"not the rendered {x1 - x0}x{y1 - y0}")
     for what, path in (("output", out), ("checkpoint", args.checkpoint), ("error log", args.error_log)):
         if path is not None:
             _check_writable(path, what)
@@ -293,6 +338,7 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
     spp = scene.sampler.spp if args.spp is None else args.spp
     prog = _Progress(not args.quiet, spp, session.film.spp)
     clock = {"checkpoint": time.perf_counter(), "partial": time.perf_counter()}
+    partial_every = args.write_partial_every or (PARTIAL_EVERY if args.write_partial_images else None)
 
     def on_pass(s: RenderSession) -> None:
         prog(s.film.spp, f"{s.busy} tasks busy" if args.ray is not None else "")
@@ -300,7 +346,7 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
         if args.checkpoint and now - clock["checkpoint"] >= args.checkpoint_every:
             save_checkpoint(args.checkpoint, s.state())
             clock["checkpoint"] = now
-        if args.write_partial_every and now - clock["partial"] >= args.write_partial_every:
+        if partial_every and now - clock["partial"] >= partial_every:
             write_outputs(out, s.image(), {}, args.exposure, header(s))
             clock["partial"] = now
         if args.error_log:
@@ -310,9 +356,14 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
                     f.write("spp,seconds,relmse\n")
                 f.write(f"{s.film.spp},{s.stats.seconds:.4f},{relative_mse(s.image(), ref):.6g}\n")
 
+    full = (0, settings.width, 0, settings.height)
+    # a crop is written as pbrt-v4 writes it: its pixels, placed in the full frame
+    windows = {} if (x0, x1, y0, y1) == full else {
+        "dataWindow": ((x0, y0), (x1 - 1, y1 - 1)), "displayWindow": ((0, 0), (settings.width - 1, settings.height - 1))}
+
     def header(s: RenderSession) -> dict:
         return {**s.stats.header(), "seed": settings.seed, "scene": str(args.scene), "sceneHash": s.fingerprint,
-                "renderer": "summertime"}
+                "renderer": "summertime", **windows}
 
     stop.phase = "render"
     try:

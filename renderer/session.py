@@ -184,7 +184,10 @@ class RenderSession:
         st.peak_memory_mb = peak_memory_mb()
 
     def image(self) -> np.ndarray:
-        return self.film.image()
+        """The image as pbrt-v4's film writes it (imaging ratio and white balance applied)."""
+        from renderer.sensor import sensor_output
+
+        return sensor_output(self.film.image(), self.scene.film, self.scene.camera)
 
     # ---- checkpoints ----------------------------------------------------------------------
 

@@ -101,7 +101,8 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     S.tex = tex
     S.mat = mats
     S.lights = L
-    S.cam = build_camera(desc.camera, width, height)
+    S.cam, cam_keep = build_camera(desc.camera, desc.film, width, height, device)
+    width, height = S.cam.width, S.cam.height       # the rendered region
     S.shape_material = wp.array(np.array([s.material for s in desc.shapes] or [0], np.int32), dtype=int, device=device)
     S.shape_light = wp.array(shape_light, dtype=int, device=device)
     # normals come from world-space winding; the builder's reverse_orientation already includes
@@ -119,5 +120,6 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
         nee=nee,
         subsurface=any(m.kind == disney.NAME and disney.has_subsurface(m.values) for m in desc.materials),
     )
-    keep = [geo, mat_keep, tex_keep, light_keep, S.shape_material, S.shape_light, S.shape_flip, S.spectral.w]
+    keep = [geo, mat_keep, tex_keep, light_keep, cam_keep, S.shape_material, S.shape_light, S.shape_flip,
+            S.spectral.w]
     return DeviceScene(struct=S, features=feats, device=device, width=width, height=height, keep=keep, geometry=geo)

@@ -53,7 +53,7 @@ def aov_kernel(features: Features) -> wp.Kernel:
                 shape = scene.geo.inst_shape[hit.inst]
                 s = surface_at(scene.geo, hit, scene.shape_flip[shape] != 0)
                 m = scene.shape_material[shape]
-                b = load_bsdf(scene.mat, scene.tex, scene.spectral, scene.spectral_n, m, s.uv)
+                b = load_bsdf(scene.mat, scene.tex, scene.spectral, scene.spectral_n, m, s)
                 b.wavelength_u = wp.randf(rng)
                 frame = shading_frame(scene, m, s)
                 wo_l = to_local(frame, -ray.d)

@@ -21,9 +21,11 @@ from renderer.integrators.subsurface import subsurface_scatter
 from renderer.lights import dispatch
 from renderer.lights.sample import LightEval, light_sampler
 from renderer.materials.bsdf import SPECULAR
+from renderer.pixel_filter import sample_filter
 from renderer.sampling.frames import to_local, to_world
 from renderer.sampling.mis import power_heuristic
 from renderer.sampling.rng import sample_rng
+from renderer.sensor import film_value
 from renderer.vecmath import max3
 
 
@@ -62,8 +64,8 @@ def integrator_kernel(features: Features) -> wp.Kernel:
         sel = 1.0 / float(wp.max(n_lights, 1))
         n_rays = int(0)
         rng = sample_rng(seed, sample_index, pixel)
-        jit = wp.vec2(wp.randf(rng), wp.randf(rng))  # drawn inline: Warp passes rng by value
-        ray = generate_ray(scene.cam, float(px) + jit[0], float(py) + jit[1],
+        fs = sample_filter(scene.cam.filter, wp.vec2(wp.randf(rng), wp.randf(rng)))  # rng drawn inline: passed by value
+        ray = generate_ray(scene.cam, float(px) + fs.p[0], float(py) + fs.p[1],
                            wp.vec2(wp.randf(rng), wp.randf(rng)))
         o = ray.o
         d = ray.d
@@ -98,7 +100,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
             if depth >= max_depth:
                 break
             m = scene.shape_material[shape]
-            b = load_bsdf(scene.mat, scene.tex, scene.spectral, scene.spectral_n, m, s.uv)
+            b = load_bsdf(scene.mat, scene.tex, scene.spectral, scene.spectral_n, m, s)
             b.wavelength_u = wp.randf(rng)
             if wp.static(has_sss):
                 # subsurface scattering may move the vertex to where light leaves the object
@@ -161,7 +163,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
                         break
                     beta = beta / (1.0 - q)
         if wp.isfinite(L) and L[0] >= 0.0 and L[1] >= 0.0 and L[2] >= 0.0:
-            film[pixel] = film[pixel] + wp.vec3d(wp.float64(L[0]), wp.float64(L[1]), wp.float64(L[2]))
+            film[pixel] = film[pixel] + film_value(scene.cam.sensor, L, fs.weight)
         else:
             wp.atomic_add(bad_samples, py, 1)   # per row: no two CPU threads ever add into one counter
         wp.atomic_add(ray_count, py, wp.float64(n_rays))

@@ -25,14 +25,16 @@ BUMP_DELTA = 0.0005
 
 @wp.func
 def load_bsdf(mat: Materials, tex: Textures, spectral: RgbWeightTable, spectral_n: int, m: int,
-              uv: wp.vec2) -> BSDF:
-    """Evaluate a material's parameter textures at uv into the rows of ``BSDF.p``. Takes only the
+              s: Surface) -> BSDF:
+    """Evaluate a material's parameter textures at the surface point (its uv, or for pbrt's
+    spherical, cylindrical and planar mappings its world position; directionmix reads its normal)
+    into the rows of ``BSDF.p``. Takes only the
     tables it reads: a CPU call copies struct arguments, and the whole ``Scene`` is 2 kB."""
     p = Slots()
     for j in range(MAX_SLOTS):
         tid = mat.slots[m, j]
         if tid >= 0:
-            v = texture_eval(tex, tid, uv)
+            v = texture_eval(tex, tid, s.uv, s.p, s.ng)
             p[j, 0] = v[0]
             p[j, 1] = v[1]
             p[j, 2] = v[2]
@@ -49,16 +51,18 @@ def load_bsdf(mat: Materials, tex: Textures, spectral: RgbWeightTable, spectral_
 
 
 @wp.func
-def bump_normal(scene: Scene, tid: int, uv: wp.vec2, ns: wp.vec3, dpdu: wp.vec3, dpdv: wp.vec3) -> wp.vec3:
+def bump_normal(scene: Scene, tid: int, s: Surface, ns: wp.vec3) -> wp.vec3:
     """Shading normal perturbed by a float displacement texture (pbrt's bump mapping, without the
-    dn/du term): the displaced surface's tangents cross to the new normal."""
-    d = texture_eval(scene.tex, tid, uv)[0]
+    dn/du term): the displaced surface's tangents cross to the new normal. The offsets move both
+    uv and the point (along dp/du, dp/dv), so every texture mapping sees them."""
+    uv = s.uv
+    d = texture_eval(scene.tex, tid, uv, s.p, s.ng)[0]
     du = BUMP_DELTA
     dv = BUMP_DELTA
-    d_u = texture_eval(scene.tex, tid, wp.vec2(uv[0] + du, uv[1]))[0]
-    d_v = texture_eval(scene.tex, tid, wp.vec2(uv[0], uv[1] + dv))[0]
-    su = dpdu + ns * ((d_u - d) / du)
-    sv = dpdv + ns * ((d_v - d) / dv)
+    d_u = texture_eval(scene.tex, tid, wp.vec2(uv[0] + du, uv[1]), s.p + s.dpdu * du, s.ng)[0]
+    d_v = texture_eval(scene.tex, tid, wp.vec2(uv[0], uv[1] + dv), s.p + s.dpdv * dv, s.ng)[0]
+    su = s.dpdu + ns * ((d_u - d) / du)
+    sv = s.dpdv + ns * ((d_v - d) / dv)
     n = wp.cross(su, sv)
     ln = wp.length(n)
     if ln <= 0.0:
@@ -89,7 +93,7 @@ def shading_functions(features: Features) -> Shading:
         if wp.static(has_bump):
             bt = scene.mat.bump[m]
             if bt >= 0:
-                ns = bump_normal(scene, bt, s.uv, ns, s.dpdu, s.dpdv)
+                ns = bump_normal(scene, bt, s, ns)
         return frame_from_tangent(ns, s.dpdu)
 
     @wp.func

@@ -29,9 +29,14 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
             os.unlink(tmp)
 
 
+_WINDOWS = ("dataWindow", "displayWindow")
+
+
 def write_exr(path: str | Path, channels: dict[str, np.ndarray] | np.ndarray,
               header: dict[str, object] | None = None) -> None:
-    """Write float32 channels (``{"R": (H, W), ...}``, or an (H, W, 3|1) array) with extra header fields."""
+    """Write float32 channels (``{"R": (H, W), ...}``, or an (H, W, 3|1) array) with extra header fields.
+    ``dataWindow``/``displayWindow`` (pairs of integer corners, inclusive) place a cropped image in
+    its full frame, as pbrt-v4 writes a crop; other fields are written as numbers or strings."""
     import OpenEXR
 
     if isinstance(channels, np.ndarray):
@@ -40,7 +45,11 @@ def write_exr(path: str | Path, channels: dict[str, np.ndarray] | np.ndarray,
         channels = {n: a[..., i] for i, n in enumerate(names)}
     chans = {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in channels.items()}
     hdr = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    hdr.update({k: (str(v) if not isinstance(v, (int, float)) else float(v)) for k, v in (header or {}).items()})
+    for k, v in (header or {}).items():
+        if k in _WINDOWS:
+            hdr[k] = tuple(np.asarray(corner, dtype=np.int32) for corner in v)
+        else:
+            hdr[k] = str(v) if not isinstance(v, (int, float)) else float(v)
     with atomic_path(path) as tmp:
         with OpenEXR.File(hdr, chans) as f:
             f.write(str(tmp))

@@ -15,23 +15,25 @@ from typing import Callable, Iterable
 import numpy as np
 
 from renderer import lights, materials
-from renderer.errors import Location, RenderError, SceneError, SceneErrors, UnsupportedError
-from renderer.scene.description import (CameraDesc, FilmDesc, InstanceSetDesc, IntegratorDesc, MeshDesc, SamplerDesc,
+from renderer.errors import Location, SceneError, SceneErrors, UnsupportedError
+from renderer.scene.description import (CameraDesc, InstanceSetDesc, IntegratorDesc, MeshDesc, SamplerDesc,
                                         SceneDescription, ShapeDesc, TextureDesc)
 from renderer.scene.params import ParamSet
 from renderer.scene.parser import Directive
+from renderer.scene.imaging import read_camera, read_film, read_filter
 from renderer.scene.plymesh import ply_mesh
-from renderer.scene.shapes import MeshPool, bilinear_mesh, disk, sphere, triangle_mesh
+from renderer.scene.resolve import NamedMaterials, missing_textures, texture_key
+from renderer.scene.shapes import MeshPool, bilinear_mesh, cylinder, disk, sphere, triangle_mesh
 from renderer.scene.state import GraphicsState, ObjectDefinition, SavedState
-from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, UNSUPPORTED, WORLD_ONLY
-from renderer.scene.texture_params import read_texture
-from renderer.settings import check_resolution
-from renderer.scene.transform import (from_pbrt_matrix, inverse, look_at, read_instance_transforms, rotate, scale,
-                                      swaps_handedness, transformed_mesh, translate)
+from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, PBRT_V3_NAMES, UNSUPPORTED, WORLD_ONLY
+from renderer.scene.texture_params import check_inputs, read_texture
+from renderer.scene.transform import (check_single_precision, from_pbrt_matrix, inverse, look_at,
+                                      read_instance_transforms, rotate, scale, swaps_handedness, transformed_mesh,
+                                      translate)
 
 #: Shapes we build, each from its parameters and the Shape directive's location.
 SHAPES: dict[str, Callable[[ParamSet, Location], MeshDesc]] = {
-    "trianglemesh": triangle_mesh, "plymesh": ply_mesh, "sphere": sphere, "disk": disk,
+    "trianglemesh": triangle_mesh, "plymesh": ply_mesh, "sphere": sphere, "disk": disk, "cylinder": cylinder,
     "bilinearmesh": bilinear_mesh,
 }
 
@@ -47,7 +49,8 @@ class Builder:
         self.state = GraphicsState()
         self.saved: list[SavedState] = []
         self.named_coordinate_systems: dict[str, np.ndarray] = {}
-        self.named_materials: dict[str, int] = {}
+        self.named_materials = NamedMaterials()
+        self.refused_textures: set[str] = set()
         self.objects: dict[str, ObjectDefinition] = {}
         self.current_object: ObjectDefinition | None = None
         self.default_material: int | None = None
@@ -65,7 +68,7 @@ class Builder:
                     self._directive(d)
                 except UnsupportedError as e:
                     refused.append(e)
-            self._finish()
+            refused.extend(self._finish())
         except SceneError as e:
             if not refused:
                 raise
@@ -87,7 +90,8 @@ class Builder:
         else:
             handler(d)
 
-    def _finish(self) -> None:
+    def _finish(self) -> list[SceneError]:
+        """Structural errors raise; names that never resolve are returned, to be reported with the rest."""
         if not self.world_begun:
             raise SceneError(f"{self.source}: no WorldBegin, so the file describes no scene", None)
         if self.saved:
@@ -95,6 +99,8 @@ class Builder:
             raise SceneError(f"{s.kind} is never closed", s.loc)
         if not lights.has_lights(self.scene):
             self.scene.warnings.append(f"{self.source}: scene has no lights: the image will be black")
+        unresolved = self.named_materials.resolve(self.scene, lambda: self._current_material(None))
+        return unresolved + missing_textures(self.scene, self.refused_textures)
 
     # -- reporting
 
@@ -111,6 +117,10 @@ class Builder:
 
     def check_known(self, d: Directive) -> str:
         name = str(d.args[0])
+        if (d.name, name) in PBRT_V3_NAMES:
+            self.warn(d.loc, f'{d.name} "{name}" is pbrt-v3\'s; read as --upgrade writes it, '
+                             f'{PBRT_V3_NAMES[d.name, name]}')
+            return name
         if name not in KNOWN_NAMES[d.name]:
             known = ", ".join(sorted(KNOWN_NAMES[d.name]))
             raise UnsupportedError(f'unknown {d.name} "{name}" (pbrt-v4 knows {known})', d.loc)
@@ -120,6 +130,12 @@ class Builder:
         what = f'{d.name} "{d.args[0]}"' if d.args else d.name
         for p in d.params.unused():
             self.warn(p.loc, f'{what}: parameter "{p.type} {p.name}" is not supported and was ignored')
+        self.warn_shadowed(d.params, what)
+
+    def warn_shadowed(self, params: ParamSet, what: str) -> None:
+        """Earlier copies of a parameter given twice (pbrt-v4 uses the last)."""
+        for p in params.shadowed:
+            self.warn(p.loc, f'{what}: parameter "{p.name}" is given again later; the later value is used (as pbrt-v4)')
 
     # -- transforms
 
@@ -175,32 +191,18 @@ class Builder:
 
     def Camera(self, d: Directive) -> None:
         name = self.check_known(d)
-        if name != "perspective":
+        if name == "realistic":
             self.unsupported(d.name, name, d.loc)
-        p = d.params
-        fov = p.float("fov", 90.0)
-        if not 0.0 < fov < 180.0:
-            raise SceneError(f'Camera: "fov" must be between 0 and 180 degrees, got {fov}', p.get("fov").loc)
-        lens_radius = p.float("lensradius", 0.0, min=0.0)
-        focal_distance = p.float("focaldistance", 1e6)
-        if focal_distance <= 0.0:
-            raise SceneError(f'Camera: "focaldistance" must be > 0, got {focal_distance}', d.loc)
         world_from_camera = inverse(self.state.ctm, "Camera", d.loc)
         self.named_coordinate_systems["camera"] = world_from_camera
-        self.scene.camera = CameraDesc(world_from_camera, fov, lens_radius, focal_distance)
+        self.scene.camera = read_camera(name, d.params, world_from_camera, d.loc)
         self.warn_unused(d)
 
     def Film(self, d: Directive) -> None:
         name = self.check_known(d)
-        if name != "rgb":
+        if name not in ("rgb", "image"):
             self.unsupported(d.name, name, d.loc)
-        p = d.params
-        self.scene.film = FilmDesc(p.int("xresolution", 1280, min=1), p.int("yresolution", 720, min=1),
-                                   p.string("filename", "pbrt.exr"))
-        try:
-            check_resolution(self.scene.film.width, self.scene.film.height)
-        except RenderError as e:
-            raise SceneError(f"Film: {e}", d.loc) from None
+        self.scene.film = replace(read_film(d.params, d.loc, self.warn), filter=self.scene.film.filter)
         self.warn_unused(d)
 
     def Sampler(self, d: Directive) -> None:
@@ -224,7 +226,8 @@ class Builder:
         self.warn_unused(d)
 
     def PixelFilter(self, d: Directive) -> None:
-        self.unsupported(d.name, self.check_known(d), d.loc)
+        self.scene.film.filter = read_filter(self.check_known(d), d.params, d.loc, self.warn)
+        self.warn_unused(d)
 
     def Accelerator(self, d: Directive) -> None:
         self.unsupported(d.name, self.check_known(d), d.loc)
@@ -279,6 +282,7 @@ class Builder:
         self.scene.materials.append(materials.from_pbrt(kind, params, loc, name))
         for p in params.unused():
             self.warn(p.loc, f'parameter "{p.name}" of material "{kind}" is not supported and was ignored')
+        self.warn_shadowed(params, f'material "{kind}"')
         return len(self.scene.materials) - 1
 
     def Material(self, d: Directive) -> None:
@@ -286,21 +290,26 @@ class Builder:
 
     def MakeNamedMaterial(self, d: Directive) -> None:
         name = str(d.args[0])
-        if name in self.named_materials:
-            raise SceneError(f'named material "{name}" is defined twice', d.loc)
         kind = d.params.string("type")
         if kind is None:
             raise SceneError(f'MakeNamedMaterial "{name}": "string type" is required', d.loc)
-        self.named_materials[name] = self._add_material(kind, d.params, d.loc, name)
+        try:
+            index = self._add_material(kind, d.params, d.loc, name)
+        except UnsupportedError:
+            self.named_materials.define(name, None, d.loc)
+            raise
+        self.named_materials.define(name, index, d.loc)
 
     def NamedMaterial(self, d: Directive) -> None:
-        name = str(d.args[0])
-        if name not in self.named_materials:
-            raise SceneError(f'no material named "{name}" (define it with MakeNamedMaterial first)', d.loc)
-        self.state.material = self.named_materials[name]
+        """Resolved when the scene is complete, as pbrt-v4 does (see renderer.scene.resolve)."""
+        self.state.material = str(d.args[0])
+        self.state.material_loc = d.loc
 
-    def _current_material(self, loc: Location) -> int:
-        """The current material; before any Material directive pbrt's default, diffuse 0.5."""
+    def _current_material(self, loc: Location | None) -> int:
+        """The current material; before any Material directive pbrt's default, diffuse 0.5; a
+        named one not yet defined gets a placeholder that the end of the scene resolves."""
+        if isinstance(self.state.material, str):
+            return self.named_materials.material_for(self.state.material, self.state.material_loc or loc)
         if self.state.material is not None:
             return self.state.material
         if self.default_material is None:
@@ -312,14 +321,19 @@ class Builder:
         name, value_type, kind = (str(a) for a in d.args)
         if value_type not in ("float", "spectrum"):
             raise SceneError(f'Texture "{name}": type must be "float" or "spectrum", not "{value_type}"', d.loc)
-        if name in self.scene.textures:
-            raise SceneError(f'texture "{name}" is defined twice (first at {self.scene.textures[name].loc})', d.loc)
-        desc = TextureDesc(name, value_type, kind, d.params, Path(d.loc.file).parent, d.loc)
-        spec = read_texture(desc)
-        if spec.base is not None and spec.base not in self.scene.textures:
-            raise SceneError(f'Texture "{name}": no texture named "{spec.base}" is defined before it', d.loc)
+        key = texture_key(self.scene.textures, name, value_type, d.loc)
+        desc = TextureDesc(name, value_type, kind, d.params, Path(d.loc.file).parent, d.loc, self.state.ctm.copy())
+        try:
+            spec = read_texture(desc)
+        except UnsupportedError:
+            self.refused_textures.add(name)
+            raise
+        for ref in spec.refs:
+            if ref not in self.scene.textures and ref not in self.refused_textures:     # either type, as pbrt
+                raise SceneError(f'Texture "{name}": no texture named "{ref}" is defined before it', d.loc)
+        check_inputs(spec, desc, self.scene.textures)
         self.warn_unused(d)
-        self.scene.textures[name] = desc
+        self.scene.textures[key] = desc
 
     # -- lights: each light module reads its own parameters (renderer.lights)
 
@@ -348,7 +362,7 @@ class Builder:
             return
         ctm = self.state.ctm
         inverse(ctm, f'Shape "{name}"', d.loc)
-        self._check_single_precision(mesh, ctm, name, d.loc)
+        check_single_precision(mesh, ctm, name, d.loc)
         obj = self.current_object
         if obj is not None:
             if self.state.area_light is not None:
@@ -364,17 +378,6 @@ class Builder:
             obj.shapes.append(index)
         else:
             self.scene.instance_sets.append(InstanceSetDesc([index], ctm[None].copy(), d.loc))
-
-    @staticmethod
-    def _check_single_precision(mesh: MeshDesc, ctm: np.ndarray, name: str, loc: Location) -> None:
-        """The device works in float32: a shape placed beyond its range would silently vanish."""
-        lo, hi = mesh.positions.min(axis=0), mesh.positions.max(axis=0)
-        corners = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
-        with np.errstate(over="ignore", invalid="ignore"):
-            world = (corners @ ctm.T).astype(np.float32)
-        if not np.all(np.isfinite(world)):
-            raise SceneError(f'Shape "{name}": its world-space position is beyond single precision (float32) '
-                             "range", loc)
 
     def ObjectBegin(self, d: Directive) -> None:
         """Like pbrt-v4, ObjectBegin also saves the graphics state, which ObjectEnd restores."""

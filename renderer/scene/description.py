@@ -29,13 +29,41 @@ class CameraDesc:
     fov_deg: float = 90.0                # on the shorter image axis, as pbrt
     lens_radius: float = 0.0
     focal_distance: float = 1e6
+    exposure_time: float = 1.0           # shutterclose - shutteropen: scales the image (pbrt's imaging ratio)
+    projection: str = "perspective"      # "orthographic", "spherical equalarea", "spherical equirectangular"
+    frame_aspect: float | None = None    # pbrt's frameaspectratio (None: the film's)
+    screen_window: tuple[float, float, float, float] | None = None   # x0, x1, y0, y1 (None: from the aspect)
+
+
+@dataclass
+class FilterDesc:
+    """A pbrt-v4 pixel filter (``PixelFilter``): its type, radii and shape parameters. The default
+    is a box of radius 0.5, which samples the pixel uniformly (pbrt-v4's own default is
+    gaussian; a scene naming no filter keeps this renderer's images as they were)."""
+
+    kind: str = "box"                    # box, gaussian, mitchell, sinc, triangle
+    radius: tuple[float, float] = (0.5, 0.5)
+    sigma: float = 0.5                   # gaussian
+    b: float = 1.0 / 3.0                 # mitchell B
+    c: float = 1.0 / 3.0                 # mitchell C
+    tau: float = 3.0                     # sinc (Lanczos) window
 
 
 @dataclass
 class FilmDesc:
+    """The ``rgb`` film as pbrt-v4 reads it: full resolution, the region rendered (a crop window
+    in [0, 1]^2 or pixel bounds; pbrt writes only that region), the cie1931 sensor's ISO and white
+    balance, the per-sample clamp and the pixel filter."""
+
     width: int = 1280
     height: int = 720
     filename: str = "pbrt.exr"
+    crop_window: tuple[float, float, float, float] | None = None   # x0, x1, y0, y1 in [0, 1]
+    pixel_bounds: tuple[int, int, int, int] | None = None          # x0, x1, y0, y1 (end exclusive)
+    iso: float = 100.0                   # imaging ratio = exposure time * iso / 100
+    white_balance: float = 0.0           # kelvin; 0: none (pbrt's default for the cie1931 sensor)
+    max_component_value: float = float("inf")
+    filter: FilterDesc = field(default_factory=FilterDesc)
 
 
 @dataclass
@@ -72,6 +100,14 @@ class TextureDesc:
     params: ParamSet
     base_dir: Path                       # relative file names resolve against the defining file
     loc: Location
+    ctm: np.ndarray | None = None        # (4, 4) world-from-texture: the CTM at the Texture directive
+
+
+def find_texture(textures: dict[str, TextureDesc], name: str, value_type: str) -> TextureDesc | None:
+    """The texture ``name`` of ``value_type``. pbrt-v4 keeps float and spectrum textures in two name
+    spaces: the first texture of a name is stored under the name, a second one of the other type
+    under "<type>:<name>". A look-up of the other type falls back to the one there is."""
+    return textures.get(f"{value_type}:{name}") or textures.get(name)
 
 
 @dataclass

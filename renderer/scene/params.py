@@ -33,10 +33,14 @@ class ParamSet:
 
     params: dict[str, Param] = field(default_factory=dict)
     loc: Location | None = None
+    shadowed: list[Param] = field(default_factory=list)
 
     def add(self, p: Param) -> None:
-        if p.name in self.params:
-            raise SceneError(f'parameter "{p.name}" given twice', p.loc)
+        """A name given twice: the last one wins, as in pbrt-v4 (its dictionary looks names up
+        from the end and does not report the shadowed one); the earlier one is kept for a warning."""
+        old = self.params.pop(p.name, None)
+        if old is not None:
+            self.shadowed.append(old)
         self.params[p.name] = p
 
     def __contains__(self, name: str) -> bool:

@@ -1,6 +1,7 @@
 """Tokens -> directives: each pbrt-v4 directive with its positional arguments, its typed
-parameter list and its file:line. ``Include``/``Import`` are expanded here, in place, so the
-builder sees one flat stream whose locations still name the file each directive came from.
+parameter list and its file:line. ``Include``/``Import`` are expanded here, in place (a ``.gz``
+file gunzipped, as pbrt-v4 does), so the builder sees one flat stream whose locations still name
+the file each directive came from.
 ``Import`` is read as ``Include``: pbrt-v4 only adds that an imported file may be parsed in
 parallel and must not leave transforms changed, which a well-formed file does not do anyway."""
 from __future__ import annotations
@@ -10,6 +11,7 @@ from pathlib import Path
 from typing import Iterator
 
 from renderer.errors import Location, MissingFileError, SceneError
+from renderer.scene.compressed import TooLargeError, read_bytes
 from renderer.scene.params import PARAM_TYPES, Param, ParamSet
 from renderer.scene.tokenizer import Token, tokenize
 
@@ -119,15 +121,17 @@ def parse_file(path: str | Path, chain: tuple[Path, ...] = (), included_at: Loca
 
 
 def _read_scene_text(path: Path, included_at: Location | None, budget: _IncludeBudget) -> str:
-    """The file's text; bytes that are not UTF-8 are kept as surrogates for the tokenizer to locate."""
+    """The file's text, gunzipped when its name ends in ``.gz`` (as pbrt-v4 reads it); its
+    (decompressed) size counts against the includes' budget. Bytes that are not UTF-8 are kept as
+    surrogates for the tokenizer to locate."""
+    require_file(path, included_at, "scene file")
+    left = MAX_INCLUDED_BYTES - budget.bytes
     try:
-        size = require_file(path, included_at, "scene file").stat().st_size
-        budget.bytes += size
-        if budget.bytes > MAX_INCLUDED_BYTES:
-            raise SceneError(f"scene files exceed {MAX_INCLUDED_BYTES >> 20} MiB in all", included_at)
-        return path.read_bytes().decode("utf-8", errors="surrogateescape")
-    except OSError as e:
-        raise SceneError(f"cannot read {shown_path(path)}: {e.strerror or e}", included_at) from None
+        data = read_bytes(path, left, included_at, "scene file")
+    except TooLargeError:
+        raise SceneError(f"scene files exceed {MAX_INCLUDED_BYTES >> 20} MiB in all", included_at) from None
+    budget.bytes += len(data)
+    return data.decode("utf-8", errors="surrogateescape")
 
 
 class _Parser:

@@ -1,12 +1,14 @@
 """pbrt's ``plymesh``: a PLY file (ASCII or binary) read with plyfile into a triangle mesh."""
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import numpy as np
 import plyfile
 
 from renderer.errors import Location, SceneError
+from renderer.scene.compressed import is_gzipped, read_bytes
 from renderer.scene.description import MeshDesc
 from renderer.scene.parser import require_file
 from renderer.scene.params import ParamSet
@@ -27,10 +29,12 @@ def ply_mesh(params: ParamSet, loc: Location) -> MeshDesc:
 
 def read_ply(path: Path, loc: Location) -> MeshDesc:
     """Positions, optional nx/ny/nz normals and UVs; polygons are fanned into triangles (a quad
-    becomes (0, 1, 2), (0, 2, 3), which keeps its winding). Errors name the PLY file and ``loc``."""
-    _check_counts(path, loc)
+    becomes (0, 1, 2), (0, 2, 3), which keeps its winding). A ``.ply.gz`` is gunzipped first, as
+    pbrt-v4 reads it, to at most MAX_PLY_BYTES. Errors name the PLY file and ``loc``."""
+    data = read_bytes(path, MAX_PLY_BYTES, loc, "PLY mesh") if is_gzipped(path) else None
+    _check_counts(path, data, loc)
     try:
-        ply = plyfile.PlyData.read(str(path))
+        ply = plyfile.PlyData.read(io.BytesIO(data) if data is not None else str(path))
     except (plyfile.PlyParseError, plyfile.PlyHeaderParseError, ValueError, OSError) as e:
         raise SceneError(f"{path}: not a readable PLY file ({e})", loc) from e
     if "vertex" not in ply:
@@ -55,14 +59,21 @@ _SIZES = {**dict.fromkeys(("char", "uchar", "int8", "uint8"), 1), **dict.fromkey
           "uint16"), 2), **dict.fromkeys(("int", "uint", "float", "int32", "uint32", "float32"), 4),
           **dict.fromkeys(("double", "float64"), 8)}
 _MAX_HEADER = 1 << 16
+#: The most a gzipped PLY may expand to in memory (2 GiB: far beyond the largest mesh of pbrt-v4-scenes).
+MAX_PLY_BYTES = 1 << 31
 
 
-def _check_counts(path: Path, loc: Location) -> None:
+def _check_counts(path: Path, data: bytes | None, loc: Location) -> None:
     """Refuse a header whose element counts need more bytes than the file has, before plyfile
     allocates for them: each element takes at least its scalars' bytes (binary) or two characters
-    per property (ASCII: a digit and a separator); a list takes at least its count."""
-    with open(path, "rb") as f:
-        head = f.read(_MAX_HEADER)
+    per property (ASCII: a digit and a separator); a list takes at least its count. ``data``: the
+    decompressed bytes of a gzipped file (None: read the file itself)."""
+    if data is not None:
+        head, file_size = data[:_MAX_HEADER], len(data)
+    else:
+        with open(path, "rb") as f:
+            head = f.read(_MAX_HEADER)
+        file_size = path.stat().st_size
     end = head.find(b"end_header")
     if not head.startswith(b"ply") or end < 0:
         raise SceneError(f"{path}: not a readable PLY file (no 'ply ... end_header' header in its first 64 KiB)", loc)
@@ -76,7 +87,7 @@ def _check_counts(path: Path, loc: Location) -> None:
             size = _SIZES.get(words[2] if words[1] == "list" else words[1], 1)
             counts[-1][1] += 2 if ascii_format else size
     need = sum(n * max(per, 1) for n, per in counts)
-    have = path.stat().st_size - end
+    have = file_size - end
     if need > have:
         raise SceneError(f"{path}: the header declares {', '.join(str(n) for n, _ in counts)} elements, "
                          f"needing at least {need} bytes, but the file holds {have}", loc)

@@ -96,6 +96,20 @@ def sphere(params: ParamSet, loc: Location) -> MeshDesc:
     return validated_mesh(*_grid(r * N, N, np.stack([u, v], -1)), loc, "sphere")
 
 
+def cylinder(params: ParamSet, loc: Location) -> MeshDesc:
+    """pbrt's cylinder about z from zmin to zmax (sorted, as pbrt): u = phi / phimax, v along z."""
+    r = _radius(params, loc)
+    z0, z1 = sorted((params.float("zmin", -1.0), params.float("zmax", 1.0)))
+    if z1 <= z0:
+        raise SceneError(f"cylinder: zmin and zmax must differ, got {z0} and {z1}", loc)
+    phi_max = _phi_max(params)
+    u, v = _uv_grid(_segments(phi_max), 1)
+    phi = u * phi_max
+    N = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(u)], -1)
+    P = np.stack([r * N[..., 0], r * N[..., 1], z0 + v * (z1 - z0)], -1)
+    return validated_mesh(*_grid(P, N, np.stack([u, v], -1)), loc, "cylinder")
+
+
 def disk(params: ParamSet, loc: Location) -> MeshDesc:
     """pbrt's disk at z = height facing +z: u = phi / phimax, v = 0 on the rim, 1 at innerradius."""
     r = _radius(params, loc)
@@ -195,7 +209,7 @@ class MeshPool:
     object-space transform), so only truly equal meshes merge."""
 
     #: Shapes whose tessellation is a pure function of their parameter list (no files read).
-    ANALYTIC = ("sphere", "disk")
+    ANALYTIC = ("sphere", "disk", "cylinder")
 
     def __init__(self, meshes: list[MeshDesc]):
         self.meshes = meshes

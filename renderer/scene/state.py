@@ -15,7 +15,8 @@ class GraphicsState:
 
     ctm: np.ndarray = field(default_factory=lambda: np.eye(4))
     reverse_orientation: bool = False
-    material: int | None = None          # None: the default diffuse material
+    material: int | str | None = None    # None: the default diffuse material; str: a NamedMaterial's name
+    material_loc: Location | None = None # where a NamedMaterial was set (for its error if never defined)
     area_light: LightDesc | None = None
     shutter_open_active: bool = True     # False after "ActiveTransform EndTime": transforms are skipped
 

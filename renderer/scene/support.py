@@ -7,11 +7,8 @@ from __future__ import annotations
 #: change the picture badly. ``"*"`` stands for any name not listed (or for a directive without
 #: a name). Parameters of supported directives that are not implemented (or misspelt) always warn.
 UNSUPPORTED: dict[tuple[str, str], tuple[str, str]] = {
-    ("Camera", "orthographic"): ("error", "only the perspective camera is implemented"),
-    ("Camera", "realistic"): ("error", "only the perspective camera is implemented"),
-    ("Camera", "spherical"): ("error", "only the perspective camera is implemented"),
+    ("Camera", "realistic"): ("error", "the realistic camera (lens systems) is not implemented"),
     ("Shape", "curve"): ("error", "curves are not implemented"),
-    ("Shape", "cylinder"): ("error", "cylinders are not implemented"),
     ("Shape", "loopsubdiv"): ("error", "subdivision surfaces are not implemented"),
     ("Material", "measured"): ("error", "measured BSDFs are not implemented"),
     ("MediumInterface", "*"): ("error", "participating media are not implemented"),
@@ -21,7 +18,6 @@ UNSUPPORTED: dict[tuple[str, str], tuple[str, str]] = {
     ("Film", "spectral"): ("warn", 'rendered as an "rgb" film'),
     ("Sampler", "*"): ("warn", "rendered with the independent sampler (low-discrepancy samplers are not implemented)"),
     ("Integrator", "*"): ("warn", 'rendered with the "path" integrator'),
-    ("PixelFilter", "*"): ("warn", "pixel filters are not implemented; samples are box-filtered"),
     ("Accelerator", "*"): ("warn", "the BVH is this renderer's own"),
     ("Attribute", "*"): ("warn", "default parameters set by Attribute are ignored"),
     ("ColorSpace", "*"): ("warn", "colours are always linear sRGB"),
@@ -44,13 +40,16 @@ KNOWN_NAMES: dict[str, frozenset[str]] = {
                         "loopsubdiv"}),
 }
 
+#: pbrt-v3 names that pbrt-v4's --upgrade rewrites, read (with a warning) as what it writes.
+PBRT_V3_NAMES = {("Film", "image"): '"rgb"', ("Camera", "environment"): '"spherical" "string mapping" "equirectangular"'}
+
 #: As in pbrt-v4: rendering options come before WorldBegin, scene contents after it.
 OPTIONS_ONLY = frozenset({"Camera", "Film", "Sampler", "Integrator", "PixelFilter", "Accelerator"})
 WORLD_ONLY = frozenset({"AttributeBegin", "AttributeEnd", "Attribute", "Shape", "ReverseOrientation", "ObjectBegin",
                         "ObjectEnd", "ObjectInstance", "LightSource", "AreaLightSource", "Material",
                         "MakeNamedMaterial", "NamedMaterial", "Texture"})
 
-#: pbrt-v4's texture classes, and the ones this renderer implements (with "uv" mapping only).
+#: pbrt-v4's texture classes, and the ones this renderer implements.
 TEXTURE_CLASSES = frozenset({"bilerp", "checkerboard", "constant", "directionmix", "dots", "fbm", "imagemap", "marble",
                              "mix", "ptex", "scale", "windy", "wrinkled"})
-SUPPORTED_TEXTURES = frozenset({"constant", "imagemap", "checkerboard", "scale"})
+SUPPORTED_TEXTURES = frozenset({"constant", "imagemap", "checkerboard", "scale", "mix", "directionmix", "bilerp"})

@@ -4,18 +4,20 @@ file:line before any device work, and the device texture table builds from the s
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from renderer.errors import Location, SceneError, UnsupportedError
-from renderer.scene.description import TextureDesc
+from renderer.scene.description import TextureDesc, find_texture
 from renderer.scene.parser import require_file
 from renderer.scene.support import SUPPORTED_TEXTURES, TEXTURE_CLASSES
 
 #: imagemap "wrap" modes, numbered as the device's texel lookup reads them
 WRAP = {"repeat": 0, "clamp": 1, "black": 2}
+#: pbrt-v4's 2D texture mappings, numbered as the device reads them
+MAPPINGS = {"uv": 0, "spherical": 1, "cylindrical": 2, "planar": 3}
 
 Value = float | np.ndarray        # a float texture's scalar or a spectrum texture's RGB
 
@@ -32,6 +34,20 @@ class TextureSpec:
     encoding: str = "sRGB"                           # imagemap encoding: sRGB, linear or "gamma G"
     wrap: str = "repeat"                             # imagemap wrap mode (a key of WRAP)
     base: str | None = None                          # scale: the one factor that is a texture
+    mapping: str = "uv"                              # a key of MAPPINGS
+    #: texture-from-world (4, 4) for the spherical/cylindrical mappings; for planar its first two
+    #: rows are pbrt's v1 and v2 applied after that transform (s, t = row . (p, 1) + udelta, vdelta)
+    xform: tuple[float, ...] = tuple(np.eye(4).ravel())
+    invert: bool = False                             # imagemap: 1 - value, clamped at 0
+    corners: tuple | None = None                     # bilerp: v00, v01, v10, v11
+    #: mix: (tex1, tex2, amount); directionmix: (tex1, tex2); product (a scale of two textures):
+    #: (tex, scale). Each a texture's name or a constant.
+    inputs: tuple = ()
+
+    @property
+    def refs(self) -> list[str]:
+        """The textures this one reads, which must be defined before it (as in pbrt-v4)."""
+        return [r for r in (self.base, *self.inputs) if isinstance(r, str)]
 
 
 def read_texture(desc: TextureDesc) -> TextureSpec:
@@ -45,24 +61,55 @@ def read_texture(desc: TextureDesc) -> TextureSpec:
         raise UnsupportedError(f'{where}: class "{desc.kind}" is not supported (supported: '
                                f'{", ".join(sorted(SUPPORTED_TEXTURES))})', desc.loc)
     p = desc.params
-    mapping = p.string("mapping", "uv")
-    if mapping != "uv":
-        raise UnsupportedError(f'{where}: mapping "{mapping}" is not supported (only "uv")',
-                               p.params["mapping"].loc)
-    uvmap = (p.float("uscale", 1.0), p.float("vscale", 1.0), p.float("udelta", 0.0), p.float("vdelta", 0.0))
     const = p.float if desc.value_type == "float" else p.rgb
     if desc.kind == "constant":
         return TextureSpec("constant", const("value", 1.0))
+    if desc.kind == "scale":
+        return _scale(desc, where)
+    if desc.kind in ("mix", "directionmix"):
+        return _mix(desc)
+    mapped = _mapping(desc, where)
+    if desc.kind == "bilerp":
+        return _bilerp(desc, where, mapped, const)
     if desc.kind == "checkerboard":
         if p.int("dimension", 2) != 2:
             raise UnsupportedError(f"{where}: only 2D checkerboard textures are supported", desc.loc)
-        return TextureSpec("checkerboard", const("tex1", 1.0), const("tex2", 0.0), uvmap)
-    if desc.kind == "scale":
-        return _scale(desc, where)
-    return _imagemap(desc, where, uvmap)
+        return replace(mapped, kind="checkerboard", value=const("tex1", 1.0), alt=const("tex2", 0.0))
+    return _imagemap(desc, where, mapped)
 
 
-def _imagemap(desc: TextureDesc, where: str, uvmap: tuple[float, float, float, float]) -> TextureSpec:
+def _mapping(desc: TextureDesc, where: str) -> TextureSpec:
+    """pbrt-v4's TextureMapping2D: "uv" (uscale, vscale, udelta, vdelta), "spherical" and
+    "cylindrical" about the texture space's origin and z axis, "planar" (v1, v2, udelta, vdelta);
+    texture space is the CTM at the Texture directive."""
+    p = desc.params
+    mapping = p.string("mapping", "uv")
+    if mapping not in MAPPINGS:
+        raise SceneError(f'{where}: unknown mapping "{mapping}" (pbrt-v4 knows {", ".join(MAPPINGS)})',
+                         p.params["mapping"].loc)
+    if mapping == "uv":
+        uvmap = (p.float("uscale", 1.0), p.float("vscale", 1.0), p.float("udelta", 0.0), p.float("vdelta", 0.0))
+        return TextureSpec("", 0.0, uvmap=uvmap)
+    m = np.linalg.inv(desc.ctm if desc.ctm is not None else np.eye(4))
+    uvmap = (1.0, 1.0, 0.0, 0.0)
+    if mapping == "planar":
+        v1, v2 = (_vector(p, name, default, where) for name, default in (("v1", (1, 0, 0)), ("v2", (0, 1, 0))))
+        rows = np.zeros((4, 4))
+        rows[0], rows[1], rows[3, 3] = v1 @ m[:3], v2 @ m[:3], 1.0
+        m, uvmap = rows, (1.0, 1.0, p.float("udelta", 0.0), p.float("vdelta", 0.0))
+    return TextureSpec("", 0.0, uvmap=uvmap, mapping=mapping, xform=tuple(float(x) for x in m.ravel()))
+
+
+def _vector(p, name: str, default: tuple, where: str) -> np.ndarray:
+    v = p.floats(name, ("vector3", "vector", "normal3", "point3", "float"))
+    if v is None:
+        return np.asarray(default, dtype=np.float64)
+    if len(v) != 3:
+        raise SceneError(f'{where}: "{name}" needs 3 values, got {len(v)}', p.params[name].loc)
+    return v
+
+
+def _imagemap(desc: TextureDesc, where: str, mapped: TextureSpec) -> TextureSpec:
     p = desc.params
     fname = p.string("filename")
     if not fname:
@@ -75,10 +122,9 @@ def _imagemap(desc: TextureDesc, where: str, uvmap: tuple[float, float, float, f
     if wrap not in WRAP:
         raise SceneError(f'{where}: imagemap wrap must be one of {sorted(WRAP)}, got "{wrap}"', desc.loc)
     scale = p.float("scale", 1.0)
-    if p.bool("invert", False):
-        raise UnsupportedError(f'{where}: imagemap "invert" is not supported', desc.loc)
     p.string("filter")                     # the filter is always bilinear; asking for another is fine
-    return TextureSpec("imagemap", scale, uvmap=uvmap, path=path, encoding=encoding, wrap=wrap)
+    return replace(mapped, kind="imagemap", value=scale, path=path, encoding=encoding, wrap=wrap,
+                   invert=bool(p.bool("invert", False)))
 
 
 def check_encoding(encoding: str, where: str, loc: Location) -> None:
@@ -96,14 +142,63 @@ def check_encoding(encoding: str, where: str, loc: Location) -> None:
     raise SceneError(f'{where}: encoding must be "sRGB", "linear" or "gamma G" with G > 0, got "{encoding}"', loc)
 
 
+def check_inputs(spec: TextureSpec, desc: TextureDesc, textures: dict[str, TextureDesc]) -> None:
+    """A mix, directionmix or product reads plain textures only (the device evaluates one level):
+    refused at load otherwise."""
+    def combines(name: str, value_type: str) -> bool:
+        s = read_texture(find_texture(textures, name, value_type))
+        return bool(s.inputs) or (s.base is not None and s.base in textures and combines(s.base, value_type))
+
+    types = (desc.value_type, desc.value_type, "float")
+    nested = [r for r, t in zip(spec.inputs, types) if isinstance(r, str) and r in textures and combines(r, t)]
+    if nested:
+        raise UnsupportedError(f'Texture "{desc.name}": its input "{nested[0]}" is itself a mix, directionmix or '
+                               "scale of two textures; one level of these is supported", desc.loc)
+
+
+def _bilerp(desc: TextureDesc, where: str, mapped: TextureSpec, const) -> TextureSpec:
+    """pbrt's bilerp, (1-s)(1-t) v00 + (1-s) t v01 + s (1-t) v10 + s t v11, made a 2x2 image whose
+    texel centres sit at s, t = 0 and 1 (the mapping is narrowed to them): the device's bilinear
+    lookup is then the same function on [0, 1]^2. Outside it the image clamps where pbrt's formula
+    extrapolates. Spherical and cylindrical coordinates lie in [0, 1] anyway but cannot be
+    narrowed here, so they are refused."""
+    if mapped.mapping in ("spherical", "cylindrical"):
+        raise UnsupportedError(f'{where}: bilerp with the "{mapped.mapping}" mapping is not supported', desc.loc)
+    corners = tuple(np.broadcast_to(np.asarray(const(k, 0.0), dtype=np.float64), (3,))
+                    for k in ("v00", "v01", "v10", "v11"))
+    su, sv, du, dv = mapped.uvmap
+    uvmap = (0.5 * su, 0.5 * sv, 0.25 + 0.5 * du, 0.25 + 0.5 * dv)
+    xform = mapped.xform
+    if mapped.mapping == "planar":                         # st = rows . p + delta: narrow the rows too
+        m = np.asarray(xform).reshape(4, 4).copy()
+        m[:2] *= 0.5
+        xform = tuple(float(x) for x in m.ravel())
+    return replace(mapped, kind="bilerp", value=1.0, uvmap=uvmap, xform=xform, corners=corners, wrap="clamp")
+
+
+def _mix(desc: TextureDesc) -> TextureSpec:
+    """pbrt-v4's mix, (1 - amount) tex1 + amount tex2, and directionmix, a tex1 + (1 - a) tex2
+    with a = |n . dir| (dir given in texture space, normalised in world space)."""
+    p = desc.params
+    read = p.float_or_texture if desc.value_type == "float" else p.rgb_or_texture
+    tex1, tex2 = read("tex1", 0.0), read("tex2", 1.0)
+    if desc.kind == "mix":
+        return TextureSpec("mix", 1.0, inputs=(tex1, tex2, p.float_or_texture("amount", 0.5)))
+    d = _vector(p, "dir", (0.0, 1.0, 0.0), f'Texture "{desc.name}"')
+    world = (desc.ctm if desc.ctm is not None else np.eye(4))[:3, :3] @ d
+    if not np.linalg.norm(world) > 0.0:
+        raise SceneError(f'Texture "{desc.name}": "dir" must not be zero', desc.loc)
+    return TextureSpec("directionmix", 1.0, alt=world / np.linalg.norm(world), inputs=(tex1, tex2))
+
+
 def _scale(desc: TextureDesc, where: str) -> TextureSpec:
-    """pbrt's ``scale`` texture (tex × scale) where at most one factor is a texture: the constant
-    factor folds into that texture's multiplier."""
+    """pbrt's ``scale`` texture (tex × scale): a constant factor folds into the other factor's
+    multiplier; two textures make a product record."""
     p = desc.params
     read = p.float_or_texture if desc.value_type == "float" else p.rgb_or_texture
     tex, scale = read("tex", 1.0), read("scale", 1.0)
     if isinstance(tex, str) and isinstance(scale, str):
-        raise UnsupportedError(f"{where}: a scale texture of two textures is not supported", desc.loc)
+        return TextureSpec("product", 1.0, inputs=(tex, scale))
     if isinstance(tex, str) or isinstance(scale, str):
         base, factor = (tex, scale) if isinstance(tex, str) else (scale, tex)
         return TextureSpec("scale", np.asarray(factor, dtype=np.float32), base=base)

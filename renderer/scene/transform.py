@@ -154,3 +154,14 @@ def _checked_npy(f: BinaryIO, size: int, path: Path, loc: Location) -> np.ndarra
     if data.size != shape[0] * 16:
         raise SceneError(f"{path}: instance transforms are truncated", loc)
     return data.reshape(shape, order="F" if fortran_order else "C")
+
+
+def check_single_precision(mesh: MeshDesc, ctm: np.ndarray, name: str, loc: Location) -> None:
+    """The device works in float32: a shape placed beyond its range would silently vanish."""
+    lo, hi = mesh.positions.min(axis=0), mesh.positions.max(axis=0)
+    corners = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    with np.errstate(over="ignore", invalid="ignore"):
+        world = (corners @ ctm.T).astype(np.float32)
+    if not np.all(np.isfinite(world)):
+        raise SceneError(f'Shape "{name}": its world-space position is beyond single precision (float32) '
+                         "range", loc)

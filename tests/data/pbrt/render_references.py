@@ -3,7 +3,9 @@
 The EXRs are committed, so tests compare against pbrt-v4 without needing it. Run this only to
 (re)make them, on a machine with the pbrt-v4 binary (``../shared/tools/pbrt-v4/pbrt.gz``, see its
 README for the shared libraries it needs). A scene sets its sample count with a first-lines comment
-``# reference-spp: N`` (default 1024); the seed is always 1.
+``# reference-spp: N`` (default 1024); the seed is 1. With ``# reference-seeds: K`` it is rendered K
+times, with seeds 1..K, into ``<name>.exr``, ``<name>-2.exr``, ...: the images' differences give
+pbrt's own noise (its spectral sampling makes it differ from ours), for tests to size tolerances.
 
     python tests/data/pbrt/render_references.py [name ...]     # no names: every scene here
 """
@@ -34,24 +36,34 @@ def pbrt_binary() -> Path:
     return exe
 
 
-def reference_spp(scene: Path) -> int:
-    head = scene.read_text().splitlines()[:5]
-    for line in head:
-        m = re.match(r"#\s*reference-spp:\s*(\d+)", line)
+def header_number(scene: Path, key: str, default: int) -> int:
+    """``# key: N`` from the scene's first lines."""
+    for line in scene.read_text().splitlines()[:5]:
+        m = re.match(rf"#\s*{key}:\s*(\d+)", line)
         if m:
             return int(m.group(1))
-    return DEFAULT_SPP
+    return default
+
+
+def reference_spp(scene: Path) -> int:
+    return header_number(scene, "reference-spp", DEFAULT_SPP)
+
+
+def reference_images(scene: Path) -> list[Path]:
+    """The EXRs a scene's references go to, one per seed (seed 1 first)."""
+    k = header_number(scene, "reference-seeds", 1)
+    return [scene.with_suffix(".exr")] + [scene.with_name(f"{scene.stem}-{i}.exr") for i in range(2, k + 1)]
 
 
 def main(names: list[str]) -> int:
     scenes = [HERE / f"{n}.pbrt" for n in names] if names else sorted(HERE.glob("*.pbrt"))
     exe = pbrt_binary()
     for scene in scenes:
-        out = scene.with_suffix(".exr")
         spp = reference_spp(scene)
-        print(f"{scene.name}: {spp} spp -> {out.name}", flush=True)
-        subprocess.run([str(exe), "--spp", str(spp), "--seed", "1", "--outfile", str(out), str(scene)],
-                       check=True, cwd=HERE)
+        for seed, out in enumerate(reference_images(scene), 1):
+            print(f"{scene.name}: {spp} spp, seed {seed} -> {out.name}", flush=True)
+            subprocess.run([str(exe), "--quiet", "--spp", str(spp), "--seed", str(seed), "--outfile", str(out),
+                            str(scene)], check=True, cwd=HERE)
     return 0
 
 
