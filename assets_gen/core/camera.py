@@ -41,6 +41,9 @@ class PinholeCamera:
         from renderer.scene import load_description
 
         desc = load_description(path)
+        require(desc.camera.projection == "perspective" and desc.camera.screen_window is None,
+                f"{path}: the grain generator sizes grains for a perspective camera with pbrt's default screen "
+                f"window, not a {desc.camera.projection} one")
         return cls(np.asarray(desc.camera.camera_to_world, dtype=np.float64), float(desc.camera.fov_deg),
                    int(desc.film.width), int(desc.film.height))
 

@@ -112,7 +112,7 @@ def test_include_resolves_against_the_including_file_and_is_textual(tmp_path):
     write(tmp_path, 'Translate 0 0 2\nShape "sphere"\nInclude "deeper/c.pbrt"\n', "parts/b.pbrt")
     write(tmp_path, 'Shape "disk"\n', "parts/deeper/c.pbrt")
     s = load(tmp_path, HEAD + 'Include "parts/b.pbrt"\nShape "sphere"\n')
-    assert [m.name for m in s.meshes] == ["sphere", "disk", "sphere"]
+    assert [s.meshes[shape.mesh].name for shape in s.shapes] == ["sphere", "disk", "sphere"]
     assert s.shapes[1].loc == Location(str(tmp_path / "parts/deeper/c.pbrt"), 1)
     # the Translate inside the include stays in effect after it, as in pbrt
     assert s.instance_sets[2].transforms[0][2, 3] == 2.0
