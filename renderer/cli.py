@@ -60,6 +60,8 @@ def _aov_list(text: str) -> tuple[str, ...]:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from renderer.sampling.sampler_spec import DEFAULT_SAMPLER, RANDOMIZATIONS
+
     p = argparse.ArgumentParser(prog="render", description="Render a pbrt-v4 scene with the Warp path tracer.")
     p.add_argument("scene", type=Path, help="pbrt-v4 scene file")
     p.add_argument("-o", "--output", type=Path, help="output .exr (linear float) or .png (sRGB); "
@@ -73,6 +75,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--threads", type=int, help="CPU worker threads (default: all cores)")
     p.add_argument("--no-nee", action="store_true", help="BSDF sampling only (no light sampling): for checks")
     p.add_argument("--rr-depth", type=int, help="Russian roulette from this path depth on (default 4; -1: off)")
+    p.add_argument("--sampler", choices=list(RANDOMIZATIONS), help="pbrt-v4 sampler instead of the scene's "
+                   f"(default: the scene's Sampler, else {DEFAULT_SAMPLER})")
     p.add_argument("--thin-film", metavar="MODE", help="thinfilm colour: rgb3 (the seed's 3 wavelengths) or "
                    "spectral:N (N jittered wavelengths; default spectral:32)")
     g = p.add_argument_group("long renders")
@@ -204,7 +208,7 @@ def main(argv: list[str] | None = None) -> int:
             raise RenderError("--error-log needs --reference REF.exr")
         w, h = args.res or (None, None)
         settings = settings_for(scene, seed=args.seed, width=w, height=h, max_depth=args.max_depth, nee=not args.no_nee,
-                                rr_depth=args.rr_depth, thin_film=args.thin_film)
+                                rr_depth=args.rr_depth, thin_film=args.thin_film, sampler=args.sampler)
         ref = None
         if args.reference:
             from renderer.io.images import read_image

@@ -25,7 +25,8 @@ from renderer.scene.shapes import bilinear_mesh, disk, sphere, triangle_mesh
 from renderer.scene.state import GraphicsState, ObjectDefinition, SavedState
 from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, UNSUPPORTED, WORLD_ONLY
 from renderer.scene.texture_params import read_texture
-from renderer.settings import check_resolution
+from renderer.sampling.sampler_spec import DEFAULT_SAMPLER, RANDOMIZATIONS
+from renderer.settings import check_resolution, sampler_spec
 from renderer.scene.transform import (from_pbrt_matrix, inverse, look_at, read_instance_transforms, rotate, scale,
                                       swaps_handedness, transformed_mesh, translate)
 
@@ -205,13 +206,23 @@ class Builder:
     def Sampler(self, d: Directive) -> None:
         name = self.check_known(d)
         p = d.params
-        if name == "stratified":
-            spp = p.int("xsamples", 4, min=1) * p.int("ysamples", 4, min=1)
-        else:
-            spp = p.int("pixelsamples", 16, min=1)
-        if name != "independent":
+        if name not in RANDOMIZATIONS:
             self.unsupported(d.name, name, d.loc)
-        self.scene.sampler = SamplerDesc("independent", spp, p.int("seed", 0))
+            name = DEFAULT_SAMPLER
+        desc = SamplerDesc(name, seed=p.int("seed", 0))
+        if name == "stratified":
+            desc.jitter = p.bool("jitter", True)
+            desc.xsamples, desc.ysamples = p.int("xsamples", 4, min=1), p.int("ysamples", 4, min=1)
+            desc.spp = desc.xsamples * desc.ysamples
+        else:
+            desc.spp = p.int("pixelsamples", 16, min=1)
+        if len(RANDOMIZATIONS[name]) > 1:
+            desc.randomize = p.string("randomize", "")
+        try:
+            sampler_spec(desc)
+        except RenderError as e:
+            raise SceneError(f"Sampler: {e}", d.loc) from None
+        self.scene.sampler = desc
         self.warn_unused(d)
 
     def Integrator(self, d: Directive) -> None:
