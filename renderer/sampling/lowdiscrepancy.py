@@ -7,6 +7,8 @@ import warp as wp
 
 from renderer.sampling.scramble import OWEN, PERMUTE_DIGITS, hash2, hash3, permutation_element, scramble
 
+#: The largest float32 below 1: samples are in [0, 1), and sums that round up are clamped to this.
+ONE_MINUS_EPSILON = wp.constant(0.99999994)
 #: Below this a further base-b digit no longer changes a float32 in [0, 1).
 _FLOAT32_ULP = wp.constant(5.9604645e-08)
 
@@ -43,7 +45,7 @@ def radical_inverse(base: int, a: wp.int64) -> float:
         scale = scale * inv
         r = r + wp.float64(a - nxt * b) * scale
         a = nxt
-    return wp.min(float(r), 0.99999994)
+    return wp.min(float(r), ONE_MINUS_EPSILON)
 
 
 @wp.func
@@ -70,7 +72,7 @@ def scrambled_radical_inverse(base: int, base_index: int, a: wp.int64, mode: int
         r = r + wp.float64(digit) * scale
         a = nxt
         k += 1
-    return wp.min(float(r), 0.99999994)
+    return wp.min(float(r), ONE_MINUS_EPSILON)
 
 
 @wp.func

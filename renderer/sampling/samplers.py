@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import warp as wp
 
-from renderer.sampling.lowdiscrepancy import morton2, radical_inverse, scrambled_radical_inverse, sobol_bits, sobol_sample
+from renderer.sampling.lowdiscrepancy import ONE_MINUS_EPSILON, morton2, radical_inverse, scrambled_radical_inverse, sobol_bits, sobol_sample
 from renderer.sampling.scramble import NONE, hash2, hash3, permutation_element, to_unit
 
 DIM_FILM = wp.constant(0)
@@ -179,7 +179,7 @@ def get_1d(p: SamplerParams, s: PixelSample, dim: int) -> float:
     if dim >= p.n_dims:
         return _hashed(s, dim)
     if p.kind == STRATIFIED:
-        return (float(_stratum(p, s, dim)) + _jitter(p, s, dim)) / float(p.spp)
+        return wp.min((float(_stratum(p, s, dim)) + _jitter(p, s, dim)) / float(p.spp), ONE_MINUS_EPSILON)
     if p.kind == HALTON:
         if p.randomize == NONE:
             return radical_inverse(p.primes[dim], s.global_index)
@@ -202,8 +202,8 @@ def get_2d(p: SamplerParams, s: PixelSample, dim: int) -> wp.vec2:
     if p.kind == STRATIFIED:
         k = _stratum(p, s, dim)
         ys = p.spp / p.xsamples
-        return wp.vec2((float(k % p.xsamples) + _jitter(p, s, dim)) / float(p.xsamples),
-                       (float(k / p.xsamples) + _jitter(p, s, dim + 1)) / float(ys))
+        return wp.vec2(wp.min((float(k % p.xsamples) + _jitter(p, s, dim)) / float(p.xsamples), ONE_MINUS_EPSILON),
+                       wp.min((float(k / p.xsamples) + _jitter(p, s, dim + 1)) / float(ys), ONE_MINUS_EPSILON))
     if p.kind == HALTON or p.kind == SOBOL:
         return wp.vec2(get_1d(p, s, dim), get_1d(p, s, dim + 1))
     sx = hash2(wp.uint32(dim), s.seed)
@@ -241,6 +241,6 @@ def get_pixel_2d(p: SamplerParams, s: PixelSample) -> wp.vec2:
         g = wp.uint32(s.global_index)
         u = wp.vec2(float(wp.float64(sobol_bits(p.matrices, 0, g)) * scale - wp.float64(s.px)),
                     float(wp.float64(sobol_bits(p.matrices, 1, g)) * scale - wp.float64(s.py)))
-        u = wp.vec2(wp.min(u[0], 0.99999994), wp.min(u[1], 0.99999994))
+        u = wp.vec2(wp.min(u[0], ONE_MINUS_EPSILON), wp.min(u[1], ONE_MINUS_EPSILON))
         return _shifted(u, s)
     return get_2d(p, s, DIM_FILM)

