@@ -5,7 +5,8 @@
 
 Every run is its own process (import, scene load, cached-kernel load, render, image written),
 timed from outside after one untimed warm-up run of the same configuration (so neither renderer
-pays its first JIT/compile). Each renderer is compared with its own high-spp reference rendered
+pays its first JIT/compile), as wall seconds and as the process's CPU seconds (user + system:
+the fairer number on a machine other jobs share; both renderers use every core). Each renderer is compared with its own high-spp reference rendered
 with its independent sampler, so a systematic difference between the two renderers does not count
 as noise. relMSE is the study's (0.1 % largest per-pixel errors trimmed); efficiency = 1 / (relMSE
 x seconds): equal efficiency means equal time to reach a given error. Writes a CSV, a Markdown
@@ -17,6 +18,7 @@ from __future__ import annotations
 import argparse
 import csv
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -90,12 +92,17 @@ def child(argv: list[str]) -> None:
     np.save(out, img)
 
 
-def run(who: str, scene: str, sampler: str, spp: int, seed: int, out: Path) -> float:
-    """Whole-process seconds of one configuration."""
-    t0 = time.perf_counter()
+def _children_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def run(who: str, scene: str, sampler: str, spp: int, seed: int, out: Path) -> tuple[float, float]:
+    """Whole-process (wall, CPU) seconds of one configuration."""
+    t0, c0 = time.perf_counter(), _children_cpu()
     subprocess.run([sys.executable, __file__, "--child", who, scene, sampler, str(spp), str(seed), str(out)],
                    check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    return time.perf_counter() - t0
+    return time.perf_counter() - t0, _children_cpu() - c0
 
 
 def measure(scenes: list[str], out: Path) -> list[dict]:
@@ -115,23 +122,25 @@ def measure(scenes: list[str], out: Path) -> list[dict]:
             for sampler in samplers:
                 img_path = out / f"{who}_{scene}_{sampler}.npy"
                 run(who, scene, sampler, spp, SEED, img_path)        # warm-up: compile / JIT caches
-                seconds = run(who, scene, sampler, spp, SEED, img_path)
+                seconds, cpu = run(who, scene, sampler, spp, SEED, img_path)
                 err = relative_mse(np.load(img_path), ref, trim=1e-3)
                 rows.append({"scene": scene, "renderer": who, "sampler": sampler, "res": f"{res[0]}x{res[1]}",
-                             "spp": spp, "seconds": round(seconds, 3), "relmse": err,
-                             "efficiency": 1.0 / (err * seconds)})
-                print(f"{scene:9s} {who:8s} {sampler:12s} {seconds:7.2f} s  relMSE {err:.3g}", flush=True)
+                             "spp": spp, "seconds": round(seconds, 3), "cpu_seconds": round(cpu, 3), "relmse": err,
+                             "efficiency": 1.0 / (err * seconds), "cpu_efficiency": 1.0 / (err * cpu)})
+                print(f"{scene:9s} {who:8s} {sampler:12s} {seconds:7.2f} s  {cpu:7.2f} cpu-s  relMSE {err:.3g}",
+                      flush=True)
     return rows
 
 
 def table(rows: list[dict]) -> str:
-    lines = ["| scene | renderer | sampler | res | spp | seconds | relMSE | efficiency | vs Mitsuba best |",
-             "|---|---|---|---|---:|---:|---:|---:|---:|"]
+    lines = ["| scene | renderer | sampler | res | spp | wall s | CPU s | relMSE | efficiency (wall) | "
+             "efficiency (CPU) | vs Mitsuba best (CPU) |", "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
-        best = max((q["efficiency"] for q in rows if q["scene"] == r["scene"] and q["renderer"] == "mitsuba"),
+        best = max((q["cpu_efficiency"] for q in rows if q["scene"] == r["scene"] and q["renderer"] == "mitsuba"),
                    default=float("nan"))
         lines.append(f"| {r['scene']} | {r['renderer']} | {r['sampler']} | {r['res']} | {r['spp']} | "
-                     f"{r['seconds']:.2f} | {r['relmse']:.3g} | {r['efficiency']:.3g} | {r['efficiency'] / best:.2f}x |")
+                     f"{r['seconds']:.2f} | {r['cpu_seconds']:.2f} | {r['relmse']:.3g} | {r['efficiency']:.3g} | "
+                     f"{r['cpu_efficiency']:.3g} | {r['cpu_efficiency'] / best:.2f}x |")
     return "\n".join(lines)
 
 
@@ -146,11 +155,11 @@ def plot(rows: list[dict], path: Path) -> None:
     for ax, scene in zip(axes[0], scenes):
         mine = [r for r in rows if r["scene"] == scene]
         labels = [f"{'mi ' if r['renderer'] == 'mitsuba' else ''}{r['sampler']}" for r in mine]
-        ax.bar(labels, [r["efficiency"] for r in mine],
+        ax.bar(labels, [r["cpu_efficiency"] for r in mine],
                color=["tab:orange" if r["renderer"] == "mitsuba" else "tab:blue" for r in mine])
         ax.set_yscale("log")
         ax.set_title(f"{scene} ({mine[0]['res']}, {mine[0]['spp']} spp)")
-        ax.set_ylabel("efficiency 1 / (relMSE x s)")
+        ax.set_ylabel("efficiency 1 / (relMSE x CPU s)")
         ax.tick_params(axis="x", rotation=60)
     fig.tight_layout()
     fig.savefig(path, dpi=120)

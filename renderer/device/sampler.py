@@ -81,6 +81,8 @@ def sample_points(spec: SamplerSpec, width: int, height: int, seed: int, samples
     (film first): what the integrator sees, for tests and plots."""
     from renderer.sampling.sample_kernel import points_kernel
 
+    if spec.name == "independent":
+        raise ValueError("the independent sampler draws in the integrator, in order, not by dimension")
     ds = upload_sampler(spec, width, height, device)
     out = wp.zeros((samples, height * width, dims), dtype=float, device=device)
     for k in range(samples):

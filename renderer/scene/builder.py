@@ -209,15 +209,11 @@ class Builder:
         if name not in RANDOMIZATIONS:
             self.unsupported(d.name, name, d.loc)
             name = DEFAULT_SAMPLER
-        desc = SamplerDesc(name, seed=p.int("seed", 0))
-        if name == "stratified":
-            desc.jitter = p.bool("jitter", True)
-            desc.xsamples, desc.ysamples = p.int("xsamples", 4, min=1), p.int("ysamples", 4, min=1)
-            desc.spp = desc.xsamples * desc.ysamples
-        else:
-            desc.spp = p.int("pixelsamples", 16, min=1)
-        if len(RANDOMIZATIONS[name]) > 1:
-            desc.randomize = p.string("randomize", "")
+        strata = name == "stratified"
+        xs, ys = (p.int("xsamples", 4, min=1), p.int("ysamples", 4, min=1)) if strata else (4, 4)
+        desc = SamplerDesc(name, xs * ys if strata else p.int("pixelsamples", 16, min=1), p.int("seed", 0),
+                           p.string("randomize", "") if len(RANDOMIZATIONS[name]) > 1 else "",
+                           p.bool("jitter", True) if strata else True, xs, ys)
         try:
             sampler_spec(desc)
         except RenderError as e:
