@@ -134,13 +134,16 @@ def measure(scenes: list[str], out: Path) -> list[dict]:
 
 def table(rows: list[dict]) -> str:
     lines = ["| scene | renderer | sampler | res | spp | wall s | CPU s | relMSE | efficiency (wall) | "
-             "efficiency (CPU) | vs Mitsuba best (CPU) |", "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+             "efficiency (CPU) | vs our independent (CPU) | vs Mitsuba best (CPU) |",
+             "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
-        best = max((q["cpu_efficiency"] for q in rows if q["scene"] == r["scene"] and q["renderer"] == "mitsuba"),
-                   default=float("nan"))
+        same = [q for q in rows if q["scene"] == r["scene"]]
+        ours = next(q["cpu_efficiency"] for q in same if q["renderer"] == "ours" and q["sampler"] == "independent")
+        best = max((q["cpu_efficiency"] for q in same if q["renderer"] == "mitsuba"), default=None)
+        vs_best = f"{r['cpu_efficiency'] / best:.2f}x" if best else "—"
         lines.append(f"| {r['scene']} | {r['renderer']} | {r['sampler']} | {r['res']} | {r['spp']} | "
                      f"{r['seconds']:.2f} | {r['cpu_seconds']:.2f} | {r['relmse']:.3g} | {r['efficiency']:.3g} | "
-                     f"{r['cpu_efficiency']:.3g} | {r['cpu_efficiency'] / best:.2f}x |")
+                     f"{r['cpu_efficiency']:.3g} | {r['cpu_efficiency'] / ours:.2f}x | {vs_best} |")
     return "\n".join(lines)
 
 
