@@ -32,6 +32,7 @@ from __future__ import annotations
 import warp as wp
 
 from renderer.sampling.lowdiscrepancy import ONE_MINUS_EPSILON, morton2, radical_inverse, scrambled_radical_inverse, sobol_bits, sobol_sample
+from renderer.sampling.rng import hash_u32
 from renderer.sampling.scramble import NONE, hash2, hash3, permutation_element, to_unit
 
 DIM_FILM = wp.constant(0)
@@ -152,11 +153,11 @@ def _zsobol_index(p: SamplerParams, s: PixelSample, dim: int) -> wp.uint32:
         shift = wp.uint32(2 * k - odd)
         digit = int((s.morton >> shift) & wp.uint32(3))
         higher = s.morton >> (shift + wp.uint32(2))
-        perm = int((hash2(higher, salt) >> wp.uint32(24)) % wp.uint32(24))
+        perm = int((hash_u32(higher ^ salt) >> wp.uint32(24)) % wp.uint32(24))
         idx = idx | (wp.uint32(p.perms[perm * 4 + digit]) << shift)
         k -= 1
     if odd == 1:
-        idx = idx | ((s.morton & wp.uint32(1)) ^ (hash2(s.morton >> wp.uint32(1), salt) & wp.uint32(1)))
+        idx = idx | ((s.morton & wp.uint32(1)) ^ (hash_u32((s.morton >> wp.uint32(1)) ^ salt) & wp.uint32(1)))
     return idx
 
 
