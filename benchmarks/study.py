@@ -4,7 +4,7 @@ each knob a user can turn, and write a CSV, a Markdown table and log-log plots.
     python benchmarks/study.py [--scene scenes/fig1_thinfilm.pbrt] [--res 160x90] [--ref-spp 2048] [--out out/study]
 
 Knobs: samples per pixel (one progressive render, measured at powers of two), maximum path
-depth, Russian roulette, and — when the scene uses the thin-film material, as the default scene
+depth, Russian roulette, the sampler (each of pbrt-v4's, its pattern as large as the run), and — when the scene uses the thin-film material, as the default scene
 (the seed's Figure 1) does — its spectral mode.
 Errors are relMSE (mean (x - r)^2 / (r^2 + 0.01), with the 0.1 % largest per-pixel errors
 dropped so rare caustic fireflies don't mask convergence; the untrimmed value is in the CSV) and
@@ -18,6 +18,7 @@ import csv
 import os
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +29,7 @@ os.environ.setdefault("WARP_CACHE_PATH", str(ROOT / ".warp-cache"))
 import renderer  # noqa: E402
 from renderer.api import settings_for  # noqa: E402
 from renderer.io.metrics import relative_mse  # noqa: E402
+from renderer.sampling.sampler_spec import RANDOMIZATIONS  # noqa: E402
 from renderer.session import RenderSession  # noqa: E402
 
 
@@ -126,6 +128,8 @@ def main() -> None:
     rows = spp_sweep(scene, res, ref, a.max_spp, seed=1)
     rows += fixed_spp_runs(scene, res, ref, a.knob_spp, "max_depth", [1, 2, 3, 5, 8, 16], seed=1)
     rows += fixed_spp_runs(scene, res, ref, a.knob_spp, "rr_depth", [-1, 1, 2, 4], seed=1, **depth_fixed)
+    patterned = replace(scene, sampler=replace(scene.sampler, spp=a.knob_spp))
+    rows += fixed_spp_runs(patterned, res, ref, a.knob_spp, "sampler", list(RANDOMIZATIONS), seed=1)
     if any(m.kind == "thinfilm" for m in scene.materials):
         # the reference is spectral:32 (jittered, unbiased); rgb3's colour error is a bias that stays
         rows += fixed_spp_runs(scene, res, ref, a.knob_spp, "thin_film",

@@ -47,15 +47,17 @@ def render(scene: SceneDescription, spp: int | None = None, device: str = "cpu",
            width: int | None = None, height: int | None = None, max_depth: int | None = None,
            nee: bool = True, rr_depth: int | None = None, threads: int | None = None, time_limit: float | None = None,
            progress: Callable[[int, int], None] | None = None, stats: RenderStats | None = None,
-           thin_film: str | None = None, cluster: "Cluster | str | None" = None) -> np.ndarray:
+           thin_film: str | None = None, sampler: str | None = None,
+           cluster: "Cluster | str | None" = None) -> np.ndarray:
     """Render and return linear RGB as float32 (H, W, 3). ``spp``, ``seed``, ``max_depth`` and the
     resolution default to the scene file's values. ``progress(done, total)`` runs after every pass.
     ``thin_film``: the thinfilm material's colour mode, ``rgb3`` or ``spectral:N`` (default spectral:32).
+    ``sampler``: a pbrt-v4 sampler name instead of the scene's (which defaults to ``zsobol``).
     Each of the scene's warnings is issued as a :class:`RenderWarning` (and listed in ``stats.warnings``).
     ``cluster``: render on Ray (a :class:`renderer.cluster.Cluster`, or an address: "local", "auto",
     "ray://host:port"); the image is bit-identical to the one-process render."""
     settings = settings_for(scene, seed=seed, width=width, height=height, max_depth=max_depth, nee=nee,
-                            rr_depth=rr_depth, thin_film=thin_film)
+                            rr_depth=rr_depth, thin_film=thin_film, sampler=sampler)
     if cluster is not None:
         from renderer.cluster import open_cluster
 

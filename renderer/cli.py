@@ -95,6 +95,8 @@ def _gib(text: str) -> float:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from renderer.sampling.sampler_spec import DEFAULT_SAMPLER, RANDOMIZATIONS
+
     p = argparse.ArgumentParser(prog="render", description="Render a pbrt-v4 scene with the Warp path tracer.")
     p.add_argument("scene", type=Path, help="pbrt-v4 scene file")
     p.add_argument("-o", "--output", type=Path, help="output .exr (linear float) or .png (sRGB); "
@@ -115,6 +117,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--pixelbounds", nargs="+", metavar="X0,X1,Y0,Y1",
                    help="render only these pixels, ends exclusive (as pbrt-v4; overrides the Film's)")
     p.add_argument("--quick", action="store_true", help="as pbrt-v4: a quarter of the resolution and 1 spp")
+    p.add_argument("--sampler", choices=list(RANDOMIZATIONS), help="pbrt-v4 sampler instead of the scene's "
+                   f"(default: the scene's Sampler, else {DEFAULT_SAMPLER})")
     p.add_argument("--thin-film", metavar="MODE", help="thinfilm colour: rgb3 (the seed's 3 wavelengths) or "
                    "spectral:N (N jittered wavelengths; default spectral:32)")
     g = p.add_argument_group("long renders")
@@ -308,7 +312,7 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
         w, h = max(1, (w or scene.film.width) // 4), max(1, (h or scene.film.height) // 4)
         args.spp = 1
     settings = settings_for(scene, seed=args.seed, width=w, height=h, max_depth=args.max_depth, nee=not args.no_nee,
-                            rr_depth=args.rr_depth, thin_film=args.thin_film)
+                            rr_depth=args.rr_depth, thin_film=args.thin_film, sampler=args.sampler)
     x0, x1, y0, y1 = region(settings.width, settings.height)       # an empty region fails here
     ref = None
     if args.reference:

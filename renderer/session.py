@@ -88,6 +88,7 @@ class RenderSession:
         from renderer.device.runtime import require_device
         from renderer.device.scene import upload
         from renderer.device.film import Film
+        from renderer.device.sampler import upload_sampler
         from renderer.integrators.path import integrator_kernel
 
         require_device(device)
@@ -98,11 +99,13 @@ class RenderSession:
                          thin_film=settings.thin_film)
         W, H = self.ds.width, self.ds.height
         self.film = Film(W, H, device)
-        self.kernel = integrator_kernel(self.ds.features)
+        self.sampler = upload_sampler(settings.sampler, W, H, device)
+        self.kernel = integrator_kernel(self.ds.features, settings.sampler.name == "independent")
         t0 = time.perf_counter()
         wp.load_module(self.kernel.module, device=device)
+        own = [w] if (w := settings.sampler.warning()) else []
         self.stats = RenderStats(width=W, height=H, compile_seconds=time.perf_counter() - t0,
-                                 warnings=list(dict.fromkeys(scene.warnings)))   # each once
+                                 warnings=list(dict.fromkeys(scene.warnings + own)))   # each once
         self.threads = max(1, min(threads or default_threads(device), H))
         self.chunks = row_chunks(H, self.threads)
         self._fingerprint: str | None = None
@@ -126,7 +129,7 @@ class RenderSession:
             while (i := next(taken)) < len(self.chunks):
                 first, rows = self.chunks[i]
                 wp.launch(self.kernel, dim=rows * self.ds.width,
-                          inputs=[self.ds.struct, s.seed, sample, first, s.max_depth, s.rr_depth,
+                          inputs=[self.ds.struct, self.sampler.params, s.seed, sample, first, s.max_depth, s.rr_depth,
                                   self.film.sample, self.film.bad, self.film.rays],
                           device=self.device)
                 self.film.accumulate(first, rows)

@@ -7,9 +7,10 @@ from typing import TYPE_CHECKING
 
 from renderer.color.spectral import parse_mode
 from renderer.errors import RenderError
+from renderer.sampling.sampler_spec import RANDOMIZATIONS, SamplerSpec
 
-if TYPE_CHECKING:                  # the scene builder checks its Film with check_resolution below
-    from renderer.scene.description import SceneDescription
+if TYPE_CHECKING:                  # the scene builder checks its Film and Sampler with the functions below
+    from renderer.scene.description import SamplerDesc, SceneDescription
 
 #: Depth from which Russian roulette may end a path by default; a negative value turns it off.
 #: pbrt-v4 starts after the second bounce (2); `benchmarks/study.py` measured 4 as 2.4x more
@@ -53,6 +54,7 @@ class RenderSettings:
     nee: bool = True
     rr_depth: int = RR_DEPTH            # Russian roulette from this depth on; negative: never
     thin_film: str = THIN_FILM_MODE     # thin-film colour mode: rgb3 or spectral:N
+    sampler: SamplerSpec = SamplerSpec()
 
     def __post_init__(self) -> None:
         check_resolution(self.width, self.height)
@@ -67,12 +69,22 @@ class RenderSettings:
             raise RenderError(str(e)) from None
 
 
+def sampler_spec(desc: SamplerDesc, name: str | None = None) -> SamplerSpec:
+    """The scene's Sampler, or the sampler ``name`` with the scene's sample count (and seed);
+    the scene's randomisation and strata carry over where the other sampler has them."""
+    if name is None or name == desc.kind:
+        return SamplerSpec(desc.kind, desc.spp, desc.randomize, desc.jitter, desc.xsamples, desc.ysamples)
+    randomize = desc.randomize if desc.randomize in RANDOMIZATIONS.get(name, ()) else ""
+    xs = next(k for k in range(int(desc.spp ** 0.5), 0, -1) if desc.spp % k == 0)   # strata as square as spp allows
+    return SamplerSpec(name, desc.spp, randomize, desc.jitter, desc.spp // xs, xs)
+
+
 def settings_for(scene: SceneDescription, seed: int | None = None, width: int | None = None,
                  height: int | None = None, max_depth: int | None = None, nee: bool = True,
-                 rr_depth: int | None = None, thin_film: str | None = None) -> RenderSettings:
+                 rr_depth: int | None = None, thin_film: str | None = None, sampler: str | None = None) -> RenderSettings:
     """Render settings: explicit values, else the scene file's, else the defaults above."""
     return RenderSettings(width=width or scene.film.width, height=height or scene.film.height,
                           seed=scene.sampler.seed if seed is None else int(seed),
                           max_depth=scene.integrator.max_depth if max_depth is None else int(max_depth), nee=nee,
                           rr_depth=RR_DEPTH if rr_depth is None else int(rr_depth),
-                          thin_film=thin_film or THIN_FILM_MODE)
+                          thin_film=thin_film or THIN_FILM_MODE, sampler=sampler_spec(scene.sampler, sampler))

@@ -1,9 +1,12 @@
 """The path-tracing megakernel: one thread per pixel, a bounded path loop, next-event estimation
 with MIS against BSDF sampling, and Russian roulette.
 
-``integrator_kernel(features)`` builds (once per distinct :class:`Features`) a kernel that only
-contains the material types, light types and bump mapping the scene uses, so a diffuse-only
-scene compiles and runs the same code however many materials the renderer learns.
+``integrator_kernel(features, independent)`` builds (once per distinct :class:`Features`) a kernel
+that only contains the material types, light types and bump mapping the scene uses, so a
+diffuse-only scene compiles and runs the same code however many materials the renderer learns.
+With ``independent`` the path draws its numbers in order from one RNG stream (the independent
+sampler); otherwise every use asks the scene's sampler for its own dimension in the order
+``renderer.sampling.samplers`` documents.
 """
 from __future__ import annotations
 
@@ -25,6 +28,9 @@ from renderer.pixel_filter import sample_filter
 from renderer.sampling.frames import to_local, to_world
 from renderer.sampling.mis import power_heuristic
 from renderer.sampling.rng import sample_rng
+from renderer.sampling.samplers import (BSDF, DIM_BOUNCE, DIM_LENS, DIMS_PER_BOUNCE, LIGHT, LIGHT_CHOICE, LOBE,
+                                        ROULETTE, SUBSURFACE, WAVELENGTH, SamplerParams, get_1d, get_2d,
+                                        get_pixel_2d, hashed_bits, start_sample)
 from renderer.sensor import film_value
 from renderer.vecmath import max3
 
@@ -41,7 +47,7 @@ def _emission(beta: wp.vec3, e: LightEval, sel: float, prev_pdf: float, prev_spe
 
 
 @lru_cache(maxsize=None)
-def integrator_kernel(features: Features) -> wp.Kernel:
+def integrator_kernel(features: Features, independent: bool = False) -> wp.Kernel:
     shading_frame, eval_pdf, sample_bsdf = shading_functions(features)
     seen, seen_ids = dispatch(features.escaping, "escaped")       # lights rays leaving the scene can see
     emitters, emitter_ids = dispatch(features.lights, "emitted")  # lights on surfaces
@@ -51,7 +57,7 @@ def integrator_kernel(features: Features) -> wp.Kernel:
     has_sss = features.subsurface
 
     @wp.kernel(module="unique", module_options=KERNEL_OPTIONS)
-    def integrate(scene: Scene, seed: int, sample_index: int, row_offset: int, max_depth: int,
+    def integrate(scene: Scene, smp: SamplerParams, seed: int, sample_index: int, row_offset: int, max_depth: int,
                   rr_depth: int,
                   film: wp.array(dtype=wp.vec3d), bad_samples: wp.array(dtype=int),
                   ray_count: wp.array(dtype=wp.float64)):
@@ -64,9 +70,15 @@ def integrator_kernel(features: Features) -> wp.Kernel:
         sel = 1.0 / float(wp.max(n_lights, 1))
         n_rays = int(0)
         rng = sample_rng(seed, sample_index, pixel)
-        fs = sample_filter(scene.cam.filter, wp.vec2(wp.randf(rng), wp.randf(rng)))  # rng drawn inline: passed by value
-        ray = generate_ray(scene.cam, float(px) + fs.p[0], float(py) + fs.p[1],
-                           wp.vec2(wp.randf(rng), wp.randf(rng)))
+        if wp.static(independent):
+            jit = wp.vec2(wp.randf(rng), wp.randf(rng))  # drawn inline: Warp passes rng by value
+            u_lens = wp.vec2(wp.randf(rng), wp.randf(rng))
+        else:
+            ps = start_sample(smp, seed, pixel, px, py, sample_index)
+            jit = get_pixel_2d(smp, ps)
+            u_lens = get_2d(smp, ps, DIM_LENS)
+        fs = sample_filter(scene.cam.filter, jit)      # the pixel filter's offset and weight
+        ray = generate_ray(scene.cam, float(px) + fs.p[0], float(py) + fs.p[1], u_lens)
         o = ray.o
         d = ray.d
         L = wp.vec3(0.0)
@@ -101,10 +113,29 @@ def integrator_kernel(features: Features) -> wp.Kernel:
                 break
             m = scene.shape_material[shape]
             b = load_bsdf(scene.mat, scene.tex, scene.spectral, scene.spectral_n, m, s)
-            b.wavelength_u = wp.randf(rng)
+            # this bounce's numbers, drawn before any of them is used (the same stream order as ever)
+            u_sss = int(0)
+            if wp.static(independent):
+                b.wavelength_u = wp.randf(rng)
+                if wp.static(has_sss):
+                    u_sss = wp.randi(rng)
+                u_sel = wp.randf(rng)
+                u_light = wp.vec2(wp.randf(rng), wp.randf(rng))
+                u_bsdf = wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng))
+                u_rr = wp.randf(rng)
+            else:
+                dim = DIM_BOUNCE + depth * DIMS_PER_BOUNCE
+                b.wavelength_u = get_1d(smp, ps, dim + WAVELENGTH)
+                if wp.static(has_sss):
+                    u_sss = int(hashed_bits(ps, dim + SUBSURFACE))
+                u_sel = get_1d(smp, ps, dim + LIGHT_CHOICE)
+                u_light = get_2d(smp, ps, dim + LIGHT)
+                ub = get_2d(smp, ps, dim + BSDF)
+                u_bsdf = wp.vec3(ub[0], ub[1], get_1d(smp, ps, dim + LOBE))
+                u_rr = get_1d(smp, ps, dim + ROULETTE)
             if wp.static(has_sss):
                 # subsurface scattering may move the vertex to where light leaves the object
-                sss = subsurface_scatter(scene, b, s, hit.inst, wo, wp.randi(rng))
+                sss = subsurface_scatter(scene, b, s, hit.inst, wo, u_sss)
                 n_rays += sss.rays
                 beta = wp.cw_mul(beta, sss.weight)
                 s = sss.s
@@ -114,8 +145,6 @@ def integrator_kernel(features: Features) -> wp.Kernel:
             wo_l = to_local(frame, wo)
 
             # next-event estimation: one light, MIS-weighted against BSDF sampling
-            u_sel = wp.randf(rng)
-            u_light = wp.vec2(wp.randf(rng), wp.randf(rng))
             if wp.static(light_sampling):
                 if n_lights > 0:
                     ls = sample_light(scene.lights, s.p, u_sel, u_light)
@@ -138,7 +167,6 @@ def integrator_kernel(features: Features) -> wp.Kernel:
                                 L = L + wp.cw_mul(beta, wp.cw_mul(f, ls.L)) * (w / ls.pdf)
 
             # continue the path by sampling the BSDF
-            u_bsdf = wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng))
             bs = sample_bsdf(b, wo_l, u_bsdf)
             if bs.pdf <= 0.0:
                 break
@@ -154,7 +182,6 @@ def integrator_kernel(features: Features) -> wp.Kernel:
             o = offset_origin(s, wi)
             d = wi
             depth += 1
-            u_rr = wp.randf(rng)
             if rr_depth >= 0 and depth >= rr_depth:
                 mb = max3(beta) * eta_scale
                 if mb < 1.0:

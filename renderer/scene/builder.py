@@ -15,7 +15,7 @@ from typing import Callable, Iterable
 import numpy as np
 
 from renderer import lights, materials
-from renderer.errors import Location, SceneError, SceneErrors, UnsupportedError
+from renderer.errors import Location, RenderError, SceneError, SceneErrors, UnsupportedError
 from renderer.scene.description import (CameraDesc, InstanceSetDesc, IntegratorDesc, MeshDesc, SamplerDesc,
                                         SceneDescription, ShapeDesc, TextureDesc)
 from renderer.scene.params import ParamSet
@@ -27,6 +27,8 @@ from renderer.scene.shapes import MeshPool, bilinear_mesh, cylinder, disk, spher
 from renderer.scene.state import GraphicsState, ObjectDefinition, SavedState
 from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, PBRT_V3_NAMES, UNSUPPORTED, WORLD_ONLY
 from renderer.scene.texture_params import check_inputs, read_texture
+from renderer.sampling.sampler_spec import DEFAULT_SAMPLER, RANDOMIZATIONS
+from renderer.settings import sampler_spec
 from renderer.scene.transform import (check_single_precision, from_pbrt_matrix, inverse, look_at,
                                       read_instance_transforms, rotate, scale, swaps_handedness, transformed_mesh,
                                       translate)
@@ -208,13 +210,19 @@ class Builder:
     def Sampler(self, d: Directive) -> None:
         name = self.check_known(d)
         p = d.params
-        if name == "stratified":
-            spp = p.int("xsamples", 4, min=1) * p.int("ysamples", 4, min=1)
-        else:
-            spp = p.int("pixelsamples", 16, min=1)
-        if name != "independent":
+        if name not in RANDOMIZATIONS:
             self.unsupported(d.name, name, d.loc)
-        self.scene.sampler = SamplerDesc("independent", spp, p.int("seed", 0))
+            name = DEFAULT_SAMPLER
+        strata = name == "stratified"
+        xs, ys = (p.int("xsamples", 4, min=1), p.int("ysamples", 4, min=1)) if strata else (4, 4)
+        desc = SamplerDesc(name, xs * ys if strata else p.int("pixelsamples", 16, min=1), p.int("seed", 0),
+                           p.string("randomize", "") if len(RANDOMIZATIONS[name]) > 1 else "",
+                           p.bool("jitter", True) if strata else True, xs, ys)
+        try:
+            sampler_spec(desc)
+        except RenderError as e:
+            raise SceneError(f"Sampler: {e}", d.loc) from None
+        self.scene.sampler = desc
         self.warn_unused(d)
 
     def Integrator(self, d: Directive) -> None:

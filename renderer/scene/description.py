@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any, Union
 import numpy as np
 
 from renderer.errors import Location
+from renderer.sampling.sampler_spec import DEFAULT_SAMPLER
 from renderer.scene.params import ParamSet
 
 if TYPE_CHECKING:
@@ -68,9 +69,13 @@ class FilmDesc:
 
 @dataclass
 class SamplerDesc:
-    kind: str = "independent"            # the only sampler so far
+    kind: str = DEFAULT_SAMPLER          # pbrt-v4's default when a scene names none
     spp: int = 16
     seed: int = 0
+    randomize: str = ""                  # "" = the sampler's default randomisation
+    jitter: bool = True                  # stratified only, as are the strata counts
+    xsamples: int = 4
+    ysamples: int = 4
 
 
 @dataclass

@@ -16,7 +16,7 @@ UNSUPPORTED: dict[tuple[str, str], tuple[str, str]] = {
                                        "(using it in a MediumInterface is an error)"),
     ("Film", "gbuffer"): ("warn", 'rendered as an "rgb" film'),
     ("Film", "spectral"): ("warn", 'rendered as an "rgb" film'),
-    ("Sampler", "*"): ("warn", "rendered with the independent sampler (low-discrepancy samplers are not implemented)"),
+    ("Sampler", "pmj02bn"): ("warn", 'rendered with the "zsobol" sampler (no library we use ships the pmj02bn tables)'),
     ("Integrator", "*"): ("warn", 'rendered with the "path" integrator'),
     ("Accelerator", "*"): ("warn", "the BVH is this renderer's own"),
     ("Attribute", "*"): ("warn", "default parameters set by Attribute are ignored"),

@@ -68,3 +68,20 @@ def test_python_api_returns_linear_float32(tmp_path):
     scene = renderer.load_scene(write_scene(tmp_path))
     img = renderer.render(scene, spp=2, seed=0)
     assert img.dtype == np.float32 and img.shape == (8, 12, 3) and np.all(np.isfinite(img))
+
+
+def test_sampler_option_selects_a_sampler_and_warns_like_pbrt(tmp_path, capsys):
+    """--sampler replaces the scene's; zsobol with the scene's 2 pixel samples is fine, with 6
+    (set by a sampler directive) it warns on stderr; an unknown name is refused by argparse."""
+    scene = write_scene(tmp_path)
+    a, b = tmp_path / "a.exr", tmp_path / "b.exr"
+    assert main([str(scene), "-o", str(a), "--spp", "2", "--sampler", "zsobol", "--quiet"]) == EXIT_OK
+    assert main([str(scene), "-o", str(b), "--spp", "2", "--sampler", "independent", "--quiet"]) == EXIT_OK
+    assert "power-of-two" not in capsys.readouterr().err
+    assert not np.array_equal(read_exr(a)[0]["G"], read_exr(b)[0]["G"])
+    scene.write_text(scene.read_text().replace('"independent" "integer pixelsamples" [2]',
+                                               '"zsobol" "integer pixelsamples" [6]'))
+    assert main([str(scene), "-o", str(a), "--spp", "1", "--quiet"]) == EXIT_OK
+    assert "power-of-two" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main([str(scene), "--sampler", "pmj"])

@@ -158,11 +158,12 @@ def rgb(v) -> dict:
     return {"type": "rgb", "value": [float(x) for x in np.broadcast_to(v, 3)]}
 
 
-def mitsuba_scene(spec: Spec, tmp: str):
+def mitsuba_scene(spec: Spec, tmp: str, sampler: str = "independent"):
+    """Mitsuba's form of ``spec`` (meshes written as PLY into ``tmp``), with one of its samplers."""
     sensor = {"type": "thinlens" if spec.lens_radius > 0 else "perspective", "fov": spec.fov, "fov_axis": "smaller",
               "to_world": mi.ScalarTransform4f().look_at(origin=list(spec.eye), target=list(spec.target), up=[0, 1, 0]),
               "film": {"type": "hdrfilm", "width": spec.width, "height": spec.height, "rfilter": {"type": "box"}},
-              "sampler": {"type": "independent", "sample_count": spec.spp}}
+              "sampler": {"type": sampler, "sample_count": spec.spp}}
     if spec.lens_radius > 0:
         sensor.update(aperture_radius=spec.lens_radius, focus_distance=spec.focal_distance)
     d = {"type": "scene", "integrator": {"type": "path", "max_depth": spec.max_depth + 1}, "sensor": sensor}

@@ -244,7 +244,7 @@ def test_defaults_without_options(tmp_path):
     np.testing.assert_array_equal(s.camera.camera_to_world, np.eye(4))
     assert (s.camera.fov_deg, s.camera.lens_radius, s.camera.focal_distance) == (90.0, 0.0, 1e6)
     assert (s.film.width, s.film.height, s.film.filename) == (1280, 720, "pbrt.exr")
-    assert (s.sampler.kind, s.sampler.spp, s.sampler.seed) == ("independent", 16, 0)
+    assert (s.sampler.kind, s.sampler.spp, s.sampler.seed) == ("zsobol", 16, 0)     # pbrt-v4's default
     assert (s.integrator.kind, s.integrator.max_depth) == ("path", 5)
     # the default material appears once, lazily: diffuse, reflectance 0.5
     assert len(s.materials) == 1 and s.materials[0].kind == "diffuse"
@@ -294,7 +294,6 @@ def test_unsupported_things_and_unused_parameters_warn_with_location(tmp_path):
     assert s.warnings == [
         f'{f}:1: Film "gbuffer": rendered as an "rgb" film',
         f'{f}:1: Film "gbuffer": parameter "float bogus" is not supported and was ignored',
-        f"{f}:2: Sampler \"stratified\": rendered with the independent sampler (low-discrepancy samplers are not implemented)",
         f'{f}:3: Integrator "bdpt": rendered with the "path" integrator',
         f"{f}:5: ColorSpace: colours are always linear sRGB",
         f"{f}:6: MakeNamedMedium: {UNSUPPORTED[('MakeNamedMedium', '*')][1]}",
@@ -302,7 +301,7 @@ def test_unsupported_things_and_unused_parameters_warn_with_location(tmp_path):
         f"{f}:10: Attribute: default parameters set by Attribute are ignored",
         f"{f}: scene has no lights: the image will be black",
     ]
-    assert (s.film.width, s.sampler.spp, s.sampler.kind, s.integrator.max_depth) == (32, 6, "independent", 3)
+    assert (s.film.width, s.sampler.spp, s.sampler.kind, s.integrator.max_depth) == (32, 6, "stratified", 3)
 
 
 def test_unsupported_table_is_well_formed_and_every_directive_is_handled():
@@ -512,7 +511,7 @@ def test_mini_scene_round_trip():
     s = load_description(DATA / "mini.pbrt")
     assert s.path == DATA / "mini.pbrt"
     assert (s.film.width, s.film.height, s.film.filename) == (64, 48, "mini.exr")
-    assert (s.sampler.kind, s.sampler.spp) == ("independent", 8)
+    assert (s.sampler.kind, s.sampler.spp) == ("zsobol", 8)
     assert (s.integrator.kind, s.integrator.max_depth) == ("path", 7)
     np.testing.assert_allclose(s.camera.camera_to_world[:3, 3], [0, 1, -5])
     np.testing.assert_allclose(s.camera.camera_to_world[:3, 2], np.array([0, -1, 5]) / math.sqrt(26))
@@ -536,4 +535,4 @@ def test_mini_scene_round_trip():
             assert 0 <= sh.material < len(s.materials)
             assert mesh.positions.dtype == np.float32 and mesh.indices.dtype == np.int32
             assert mesh.indices.max() < len(mesh.positions)
-    assert s.warnings == [f'{DATA / "mini.pbrt"}:5: Sampler "zsobol": rendered with the independent sampler (low-discrepancy samplers are not implemented)']
+    assert s.warnings == []
