@@ -7,6 +7,7 @@ written but some samples were NaN/Inf and were dropped; 130 interrupted by SIGIN
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 import tempfile
@@ -186,7 +187,9 @@ class _Progress:
 class _StopSignals:
     """SIGINT/SIGTERM handling for the whole command, installed before the scene is read.
 
-    While loading and compiling, a signal aborts at once (nothing to keep). While rendering, the
+    While loading and compiling, a signal ends the process at once with its exit code (nothing has
+    been written, and unwinding through a library mid-import or mid-compile is not reliable: an
+    interrupt raised there sometimes surfaced again at interpreter exit). While rendering, the
     first sets ``signum`` and the render stops after the pass in flight; a second stops that pass
     too (the session keeps the finished ones). While writing, and after a signal has decided the
     exit, further signals are ignored, so the image and checkpoint are always written whole and the
@@ -205,7 +208,8 @@ class _StopSignals:
         first = self.signum is None
         self.signum = self.signum or signum
         if self.phase == "load" and first:
-            raise KeyboardInterrupt
+            print("render: interrupted before any pass finished; nothing written", file=sys.stderr, flush=True)
+            os._exit(128 + signum)
         if self.phase == "render":
             if not first:
                 raise KeyboardInterrupt       # caught by the session after the pass in flight
