@@ -24,6 +24,9 @@ from renderer.scene.description import MaterialDesc, TextureDesc
 from renderer.scene.params import ParamSet
 from renderer.textures import TextureTable
 
+#: The largest float32: the bound of a slot whose parameter declares none.
+FLOAT_MAX = float(np.finfo(np.float32).max)
+
 REGISTRY: dict[str, ModuleType] = {m.NAME: m for m in (diffuse, dielectric, conductor, thinfilm, disney,
                                                           coateddiffuse, coatedconductor)}
 for _m in REGISTRY.values():
@@ -107,6 +110,8 @@ class Materials:
     layers: wp.array(dtype=wp.vec4)     # every material's layer rows (renderer.materials.stack; 1 dummy row if none)
     layer_first: wp.array(dtype=int)    # a material's first row in layers
     layer_count: wp.array(dtype=int)    # and its number of rows (0: no stack)
+    bounds: wp.array2d(dtype=wp.vec2)   # (n_materials, MAX_SLOTS) each slot's declared [lo, hi]: textures are
+                                        # clamped to it as pbrt clamps (a reflectance texture of 100 reflects 1)
 
 
 def device_layout(desc: MaterialDesc) -> tuple[list[tuple[Parameter, Any]], int]:
@@ -142,6 +147,7 @@ def build_materials(descs: list[MaterialDesc], textures: dict[str, TextureDesc],
     count = np.zeros(n, dtype=np.int32)
     rows = [np.zeros((1, 4), np.float32)]
     n_rows = 1
+    bounds = np.tile(np.array([-FLOAT_MAX, FLOAT_MAX], np.float32), (n, MAX_SLOTS, 1))
     for i, d in enumerate(descs):
         rows_of = getattr(module_of(d.kind, d.loc), "layer_rows", None)
         if rows_of is not None:
@@ -152,6 +158,7 @@ def build_materials(descs: list[MaterialDesc], textures: dict[str, TextureDesc],
         layout, flags[i] = device_layout(d)
         for j, (p, v) in enumerate(layout):
             slot_ids[i, j] = _texture_id(p, v, table, textures, d.loc)
+            bounds[i, j] = (-FLOAT_MAX if p.lo is None else p.lo, FLOAT_MAX if p.hi is None else p.hi)
         bump[i] = _texture_id(COMMON.by_name["displacement"], d.values.get("displacement"), table, textures, d.loc)
         kinds[i] = kind_id(d.kind)
     M = Materials()
@@ -162,4 +169,6 @@ def build_materials(descs: list[MaterialDesc], textures: dict[str, TextureDesc],
     M.layers = wp.array(np.concatenate(rows), dtype=wp.vec4, device=device)
     M.layer_first = wp.array(first, dtype=int, device=device)
     M.layer_count = wp.array(count, dtype=int, device=device)
-    return M, [M.kind, M.slots, M.flags, M.bump, M.layers, M.layer_first, M.layer_count], {d.kind for d in descs}
+    M.bounds = wp.array(bounds, dtype=wp.vec2, device=device)
+    keep = [M.kind, M.slots, M.flags, M.bump, M.layers, M.layer_first, M.layer_count, M.bounds]
+    return M, keep, {d.kind for d in descs}
