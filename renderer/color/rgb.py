@@ -13,8 +13,8 @@ def blackbody_rgb(temperature_k: float) -> np.ndarray:
     to 0, since an RGB renderer cannot emit negative light."""
     import colour
 
-    if not temperature_k > 0:
-        raise ValueError(f"blackbody temperature must be positive, got {temperature_k} K")
+    if not 0 < temperature_k < 1e6:
+        raise ValueError(f"blackbody temperature must be between 0 and 1e6 K, got {temperature_k} K")
     shape = colour.SpectralShape(360, 830, 1)
     sd = colour.sd_blackbody(float(temperature_k), shape)
     cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape)

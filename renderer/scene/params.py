@@ -132,8 +132,9 @@ class ParamSet:
                 raise SceneError(f'parameter "{name}" needs 3 values, got {len(p.values)}', p.loc)
             v = np.asarray(p.values, dtype=np.float64)
         elif p.type == "blackbody":
-            if len(p.values) != 1 or not float(p.values[0]) > 0:
-                raise SceneError(f'parameter "{name}": blackbody needs one positive temperature in kelvin', p.loc)
+            if len(p.values) != 1 or not 0 < float(p.values[0]) < 1e6:
+                raise SceneError(f'parameter "{name}": blackbody needs one temperature between 0 and 1e6 kelvin',
+                                 p.loc)
             from renderer.color.rgb import blackbody_rgb
 
             v = blackbody_rgb(float(p.values[0]))

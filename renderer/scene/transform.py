@@ -6,6 +6,7 @@ camera-from-world in pbrt's left-handed camera frame (+z forward, +y up, +x = up
 from __future__ import annotations
 
 import math
+import tokenize
 import zipfile
 from dataclasses import replace
 from pathlib import Path
@@ -127,10 +128,16 @@ def read_instance_transforms(path: Path, loc: Location) -> np.ndarray:
             with open(path, "rb") as f:
                 T = _checked_npy(f, path.stat().st_size, path, loc)
         T = np.asarray(T, dtype=np.float64)
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as e:
+    except (OSError, ValueError, EOFError, SyntaxError, tokenize.TokenError, zipfile.BadZipFile) as e:
+        # numpy parses the header as Python literals: a garbled one raises SyntaxError/TokenError
         raise SceneError(f"{path}: cannot read instance transforms ({e})", loc) from e
     if not np.all(np.isfinite(T)):
         raise SceneError(f"{path}: instance transforms contain NaN or infinite values", loc)
+    with np.errstate(all="ignore"):
+        singular = np.flatnonzero(~(np.abs(np.linalg.det(T)) > 0.0) | ~np.isfinite(np.linalg.det(T)))
+    if len(singular):
+        raise SceneError(f"{path}: instance transform {singular[0]} is singular (a zero scale or a degenerate "
+                         f"matrix; {len(singular)} in all)", loc)
     return T
 
 

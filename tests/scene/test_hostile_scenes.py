@@ -214,3 +214,25 @@ def test_equal_meshes_merge_only_when_their_bytes_are_equal(tmp_path):
     path.write_text(HEAD + tri.format(z=0) + tri.format(z=0) + tri.format(z=1e-7))
     desc = load_description(path)
     assert [s.mesh for s in desc.shapes] == [0, 0, 1]
+
+
+def test_fuzzer_finds_singular_instance_transforms_and_garbled_npy_headers(tmp_path):
+    """Two cases the fuzzer found: one singular matrix among the instances (numpy's LinAlgError at
+    upload) and a NUL byte in the .npy header (numpy's SyntaxError while parsing it)."""
+    T = np.stack([np.eye(4)] * 3)
+    T[1, :3, :3] = 0.0
+    np.save(tmp_path / "t.npy", T)
+    body = 'ObjectBegin "o"\nShape "sphere"\nObjectEnd\nObjectInstance "o" "string transforms" "t.npy"\n'
+    refused(tmp_path, HEAD + body, 6, "instance transform 1 is singular")
+    buf = io.BytesIO()
+    np.save(buf, np.stack([np.eye(4)] * 3))
+    raw = bytearray(buf.getvalue())
+    raw[raw.index(b"}") - 1] = 0
+    (tmp_path / "t.npy").write_bytes(bytes(raw))
+    refused(tmp_path, HEAD + body, 6, "cannot read instance transforms")
+
+
+@pytest.mark.parametrize("kelvin", ["0", "-5", "1e7"])
+def test_blackbody_temperatures_outside_the_tabulated_range_are_refused(tmp_path, kelvin):
+    refused(tmp_path, HEAD + f'LightSource "distant" "blackbody L" [{kelvin}]\n' + SPHERE, 3,
+            "between 0 and 1e6 kelvin")
