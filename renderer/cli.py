@@ -133,7 +133,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"as pbrt-v4: write the image periodically (every {PARTIAL_EVERY:g} s, or as "
                         "--write-partial-every says)")
     g.add_argument("--aov", type=_aov_list, default=(), metavar="LIST",
-                   help="extra EXR layers: albedo,normal,depth")
+                   help="extra EXR layers: albedo,normal,depth,material,instance (ids at pixel centres, -1: none)")
     g.add_argument("--denoise", action="store_true", help="denoise with Intel OIDN (pip install '.[denoise]')")
     g.add_argument("--reference", type=Path, metavar="REF.exr", help="reference image for --error-log")
     g.add_argument("--error-log", type=Path, metavar="CSV", help="append spp,seconds,relMSE rows as passes finish")

@@ -1,5 +1,11 @@
 """Arbitrary output variables at the first visible surface: albedo, shading normal and depth,
-the guides a denoiser needs. Rendered by their own small kernel after the beauty passes.
+the guides a denoiser needs, and the material and instance ids (as pbrt-v4's gbuffer film gives)
+so figures and tests can pick out a region of the picture. Rendered by their own small kernel
+after the beauty passes.
+
+The ids are those of the surface seen through the pixel's centre (not averaged: an id is a label),
+-1 where the centre sees no surface: the material's index in the scene description's materials,
+and the instance's index in the flattened instance list (file order).
 
 Albedo is the material's directional albedo seen from the camera, estimated as the mean
 throughput weight of its own BSDF samples, so every material (present or future) defines it
@@ -23,9 +29,10 @@ from renderer.sampling.rng import sample_rng
 if TYPE_CHECKING:
     from renderer.session import RenderSession
 
-AOV_NAMES = ("albedo", "normal", "depth")
+AOV_NAMES = ("albedo", "normal", "depth", "material", "instance")
 #: Channel names per AOV in the EXR (layer.channel, as OpenEXR's multi-layer convention).
-AOV_CHANNELS = {"albedo": ("R", "G", "B"), "normal": ("X", "Y", "Z"), "depth": ("Z",)}
+AOV_CHANNELS = {"albedo": ("R", "G", "B"), "normal": ("X", "Y", "Z"), "depth": ("Z",), "material": ("id",),
+                "instance": ("id",)}
 
 
 @lru_cache(maxsize=None)
@@ -34,11 +41,19 @@ def aov_kernel(features: Features) -> wp.Kernel:
 
     @wp.kernel(module="unique", module_options=KERNEL_OPTIONS)
     def first_hit(scene: Scene, seed: int, n_samples: int, albedo: wp.array(dtype=wp.vec3),
-                  normal: wp.array(dtype=wp.vec3), depth: wp.array(dtype=float)):
+                  normal: wp.array(dtype=wp.vec3), depth: wp.array(dtype=float), material: wp.array(dtype=float),
+                  instance: wp.array(dtype=float)):
         pixel = wp.tid()
         width = scene.cam.width
         px = pixel % width
         py = pixel // width
+        centre = generate_ray(scene.cam, float(px) + 0.5, float(py) + 0.5, wp.vec2(0.5, 0.5))
+        seen = intersect(scene.geo, centre.o, centre.d, 1.0e30)
+        material[pixel] = -1.0
+        instance[pixel] = -1.0
+        if seen.inst >= 0:
+            material[pixel] = float(scene.shape_material[scene.geo.inst_shape[seen.inst]])
+            instance[pixel] = float(seen.inst)
         a = wp.vec3(0.0)
         n = wp.vec3(0.0)
         z = float(0.0)
@@ -81,12 +96,14 @@ def aov_kernel(features: Features) -> wp.Kernel:
 def render_aovs(session: RenderSession, n_samples: int = 16) -> dict[str, np.ndarray]:
     """Albedo (H, W, 3) in [0, 1] (box-filtered over ``n_samples``, 0 for the background), unit
     shading normal (H, W, 3) and camera-space depth (H, W, 1) averaged over the samples that hit
-    (both 0 where nothing is hit)."""
+    (both 0 where nothing is hit), and the material and instance ids (H, W, 1) at pixel centres
+    (-1: nothing), exact as float32 up to 2^24."""
     ds = session.ds
     W, H, dev = ds.width, ds.height, session.device
     out = {"albedo": wp.zeros(W * H, dtype=wp.vec3, device=dev), "normal": wp.zeros(W * H, dtype=wp.vec3, device=dev),
-           "depth": wp.zeros(W * H, dtype=float, device=dev)}
+           "depth": wp.zeros(W * H, dtype=float, device=dev), "material": wp.zeros(W * H, dtype=float, device=dev),
+           "instance": wp.zeros(W * H, dtype=float, device=dev)}
     wp.launch(aov_kernel(ds.features), dim=W * H,
-              inputs=[ds.struct, session.settings.seed, n_samples, out["albedo"], out["normal"], out["depth"]],
+              inputs=[ds.struct, session.settings.seed, n_samples, *out.values()],
               device=dev)
     return {k: v.numpy().reshape(H, W, -1) for k, v in out.items()}

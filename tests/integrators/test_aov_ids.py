@@ -1,0 +1,42 @@
+"""The material and instance id AOVs label every pixel with the surface its centre sees."""
+from __future__ import annotations
+
+import numpy as np
+
+from renderer.api import load_scene, open_session, settings_for
+from renderer.integrators.aov import render_aovs
+
+SCENE = """LookAt 0 0 -6  0 0 0  0 1 0
+Camera "perspective" "float fov" [40]
+Film "rgb" "integer xresolution" [24] "integer yresolution" [12]
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+AttributeBegin
+  Translate -1.1 0 0
+  Material "conductor"
+  Shape "sphere" "float radius" [0.9]
+AttributeEnd
+AttributeBegin
+  Translate 1.1 0 0
+  Material "dielectric"
+  Shape "sphere" "float radius" [0.9]
+AttributeEnd
+"""
+
+
+def test_material_and_instance_ids_label_each_region(tmp_path):
+    path = tmp_path / "ids.pbrt"
+    path.write_text(SCENE)
+    desc = load_scene(path)
+    aov = render_aovs(open_session(desc, settings_for(desc)))
+    mat, inst = aov["material"][..., 0], aov["instance"][..., 0]
+    kinds = [m.kind for m in desc.materials]
+    # pbrt's x axis points left in the image here (the camera looks along +z from -z)
+    left, right = mat[6, 8], mat[6, 15]
+    assert {kinds[int(left)], kinds[int(right)]} == {"conductor", "dielectric"}
+    assert mat[0, 0] == -1 and inst[0, 0] == -1                       # the corner sees the sky
+    assert set(np.unique(mat)) == {-1.0, left, right}
+    assert set(np.unique(inst)) == {-1.0, 0.0, 1.0}
+    assert np.array_equal(mat == -1, inst == -1)                      # one background, two labels
+    assert np.all(mat == np.round(mat)) and np.all(inst == np.round(inst))
