@@ -1,55 +1,17 @@
-"""Our film and pixel filters against pbrt-v4's own images of the same scenes (tests/data/pbrt: the
-``.pbrt`` files and the ``.exr`` pbrt-v4 made of each, at the spp their first line gives; see
-render_references.py). pbrt-v4 is not needed to run this.
-
-Tolerance from the noise: each renderer renders each scene twice with independent seeds (pbrt:
-``<name>.exr`` and ``<name>-2.exr``); a pair's difference estimates the per-pixel variance of its
-mean, Var = E[(A - B)^2] / 4. ``chi`` = the sum of squared differences between the two means over
-the sum of both variances is about 1 when the images agree up to noise; it must stay under CHI. Our box-filtered image fails against every other filter's reference: the check
-can tell the filters apart. Per-channel image means must agree within
-MEAN_TOL (pbrt is spectral, we carry RGB)."""
+"""Our film, pixel filters, cameras, shapes and textures against pbrt-v4's own images of the same
+scenes (the comparison is :mod:`pbrt_compare`'s; pbrt-v4 is not needed to run this). chi must stay
+under CHI; our box-filtered image fails against every other filter's reference, so the check can
+tell the filters apart. Per-channel image means must agree within MEAN_TOL (pbrt is spectral, we
+carry RGB)."""
 from __future__ import annotations
-
-from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 import pytest
 
+from pbrt_compare import CHI, DATA, DISTINCT, MEAN_TOL, chi, ours, ours_of, reference
 from renderer.api import load_scene, render
-from renderer.io.images import read_exr
-from renderer.scene.description import SceneDescription
-
-DATA = Path(__file__).parents[1] / "data" / "pbrt"
-SPP = 128            # ours, in two halves
-CHI = 1.5           # measured 0.95-1.0 for every scene that matches
-DISTINCT = 2.5      # what a wrong filter gives at least
-MEAN_TOL = 0.01
-
-
-def reference(name: str) -> tuple[np.ndarray, np.ndarray]:
-    """pbrt-v4's mean of its two renders, and that mean's per-pixel variance."""
-    a, b = (np.stack([ch[c] for c in "RGB"], -1) for ch, _ in (read_exr(DATA / f"{n}.exr") for n in (name, f"{name}-2")))
-    return 0.5 * (a + b), 0.25 * (a - b) ** 2
-
-
-def ours(scene: SceneDescription) -> tuple[np.ndarray, np.ndarray]:
-    """Our N-spp mean and its per-pixel variance."""
-    a = render(scene, spp=SPP // 2, seed=11)
-    b = render(scene, spp=SPP // 2, seed=12)
-    return 0.5 * (a + b), 0.25 * (a - b) ** 2
-
-
-def chi(img: np.ndarray, var: np.ndarray, ref: np.ndarray, ref_var: np.ndarray) -> float:
-    return float(((img - ref) ** 2).sum() / (var + ref_var).sum())
-
 
 FILTERS = ["filter_box", "filter_gaussian", "filter_mitchell", "filter_sinc", "filter_triangle"]
-
-
-@lru_cache(maxsize=None)
-def ours_of(name: str) -> tuple[np.ndarray, np.ndarray]:
-    return ours(load_scene(DATA / f"{name}.pbrt"))
 
 
 @pytest.mark.parametrize("name", FILTERS)
