@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -64,16 +65,36 @@ class ParamSet:
 
     def float(self, name: str, default: float | None = None, *, min: float | None = None,
               max: float | None = None) -> float | None:
+        """A number; a ``spectrum`` (a dielectric's ``"spectrum eta" "glass-BK7"``) gives its
+        luminance-weighted mean (:mod:`renderer.color.named_spectra`)."""
+        q = self.params.get(name)
+        if q is not None and q.type == "spectrum":
+            from renderer.color.named_spectra import spectrum_mean
+
+            q.used = True
+            v = float(q.values[0]) if len(q.values) == 1 and not isinstance(q.values[0], str) \
+                else spectrum_mean(self._spectrum(q))
+            return self._bounded(name, v, min, max, q.loc)
         p = self._one(name, ("float", "integer"), 1)
         if p is None:
             return default
-        v = float(p.values[0])
+        return self._bounded(name, float(p.values[0]), min, max, p.loc)
+
+    def _spectrum(self, p: Param) -> np.ndarray:
+        from renderer.color.named_spectra import spectrum
+
+        base = Path(p.loc.file).parent if p.loc else Path(".")
+        return spectrum(p.values, base, f'parameter "{p.name}"', p.loc)
+
+    @staticmethod
+    def _bounded(name: str, v: float, min: float | None, max: float | None, loc: Location) -> float:
+        """``v`` checked finite and within [min, max]."""
         if not math.isfinite(v):
-            raise SceneError(f'parameter "{name}" must be finite, got {v}', p.loc)
+            raise SceneError(f'parameter "{name}" must be finite, got {v}', loc)
         if min is not None and v < min:
-            raise SceneError(f'parameter "{name}" must be >= {min}, got {v}', p.loc)
+            raise SceneError(f'parameter "{name}" must be >= {min}, got {v}', loc)
         if max is not None and v > max:
-            raise SceneError(f'parameter "{name}" must be <= {max}, got {v}', p.loc)
+            raise SceneError(f'parameter "{name}" must be <= {max}, got {v}', loc)
         return v
 
     def int(self, name: str, default: int | None = None, *, min: int | None = None) -> int | None:
@@ -123,7 +144,7 @@ class ParamSet:
 
     def rgb(self, name: str, default: Any = None) -> np.ndarray | None:
         """A colour parameter as linear sRGB: ``rgb``, ``blackbody`` (luminance 1, as pbrt-v4) or a
-        constant ``spectrum`` value. Named and sampled spectra are refused rather than guessed."""
+        ``spectrum`` (constant, sampled, named or a file: :mod:`renderer.color.named_spectra`)."""
         p = self.get(name)
         if p is None:
             return None if default is None else np.asarray(default, dtype=np.float64) * np.ones(3)
@@ -140,10 +161,14 @@ class ParamSet:
             v = blackbody_rgb(float(p.values[0]))
         elif p.type == "spectrum" and len(p.values) == 1 and not isinstance(p.values[0], str):
             v = np.full(3, float(p.values[0]))
+        elif p.type == "spectrum":
+            from renderer.color.named_spectra import spectrum_rgb
+
+            v = spectrum_rgb(self._spectrum(p))
         elif p.type in ("float",) and len(p.values) == 1:
             v = np.full(3, float(p.values[0]))
         else:
-            raise SceneError(f'parameter "{name}": only rgb, blackbody and constant spectrum values are '
+            raise SceneError(f'parameter "{name}": only rgb, blackbody and spectrum values are '
                              f'supported (got {p.type} {p.values[:4]})', p.loc)
         if not np.all(np.isfinite(v)):
             raise SceneError(f'parameter "{name}" contains NaN or infinite values', p.loc)
