@@ -35,10 +35,12 @@ def load_bsdf(mat: Materials, tex: Textures, spectral: RgbWeightTable, spectral_
         tid = mat.slots[m, j]
         if tid >= 0:
             v = texture_eval(tex, tid, s.uv, s.p, s.ng)
-            r = mat.bounds[m, j]        # the parameter's declared range, as pbrt clamps textures
-            p[j, 0] = wp.clamp(v[0], r[0], r[1])
-            p[j, 1] = wp.clamp(v[1], r[0], r[1])
-            p[j, 2] = wp.clamp(v[2], r[0], r[1])
+            if wp.isfinite(v):          # a NaN stays NaN: its sample is dropped and counted, not hidden
+                r = mat.bounds[m, j]    # the parameter's declared range, as pbrt clamps textures
+                v = wp.vec3(wp.clamp(v[0], r[0], r[1]), wp.clamp(v[1], r[0], r[1]), wp.clamp(v[2], r[0], r[1]))
+            p[j, 0] = v[0]
+            p[j, 1] = v[1]
+            p[j, 2] = v[2]
     b = BSDF()
     b.kind = mat.kind[m]
     b.p = p
