@@ -47,7 +47,7 @@ class HalfEdges:
             raise SceneError("loopsubdiv: neighbouring triangles are wound in opposite directions", loc)
         self.twin[h0], self.twin[h1] = h1, h0
         self.boundary_edge = count == 1
-        self.tail, self.head = tail, head
+        self.tail = tail
         self.n_vertices = n_vertices
         ends_b = self.ends[self.boundary_edge]
         nb = np.bincount(ends_b.ravel(), minlength=n_vertices)
@@ -153,9 +153,7 @@ def _limit_normals(P: np.ndarray, he: HalfEdges) -> np.ndarray:
 def _boundary_tangents(P: np.ndarray, ring: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """pbrt's boundary tangents: across (from one boundary neighbour to the other) and inward,
     with its weights for 2, 3, 4 (regular) and more ring vertices."""
-    V = len(P)
-    idx = np.arange(V)
-    last = ring[np.maximum(n - 1, 0), idx]
+    last = ring[np.maximum(n - 1, 0), np.arange(len(P))]
     S = last - ring[0]
     T2 = ring[0] + ring[1 % len(ring)] - 2.0 * P
     T3 = ring[min(1, len(ring) - 1)] - P
