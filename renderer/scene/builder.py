@@ -21,6 +21,7 @@ from renderer.scene.description import (CameraDesc, InstanceSetDesc, IntegratorD
 from renderer.scene.params import ParamSet
 from renderer.scene.parser import Directive
 from renderer.scene.imaging import read_camera, read_film, read_filter
+from renderer.scene.loop_subdivision import loop_subdivision_surface
 from renderer.scene.plymesh import ply_mesh
 from renderer.scene.resolve import NamedMaterials, missing_textures, texture_key
 from renderer.scene.shapes import MeshPool, bilinear_mesh, cylinder, disk, sphere, triangle_mesh
@@ -36,8 +37,7 @@ from renderer.scene.transform import (check_single_precision, from_pbrt_matrix, 
 #: Shapes we build, each from its parameters and the Shape directive's location.
 SHAPES: dict[str, Callable[[ParamSet, Location], MeshDesc]] = {
     "trianglemesh": triangle_mesh, "plymesh": ply_mesh, "sphere": sphere, "disk": disk, "cylinder": cylinder,
-    "bilinearmesh": bilinear_mesh,
-}
+    "bilinearmesh": bilinear_mesh, "loopsubdiv": loop_subdivision_surface}
 
 
 class Builder:

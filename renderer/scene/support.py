@@ -9,7 +9,6 @@ from __future__ import annotations
 UNSUPPORTED: dict[tuple[str, str], tuple[str, str]] = {
     ("Camera", "realistic"): ("error", "the realistic camera (lens systems) is not implemented"),
     ("Shape", "curve"): ("error", "curves are not implemented"),
-    ("Shape", "loopsubdiv"): ("error", "subdivision surfaces are not implemented"),
     ("Material", "measured"): ("error", "measured BSDFs are not implemented"),
     ("MediumInterface", "*"): ("error", "participating media are not implemented"),
     ("MakeNamedMedium", "*"): ("warn", "participating media are not implemented; the medium is ignored "

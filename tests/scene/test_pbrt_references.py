@@ -166,3 +166,35 @@ def test_bilerp_texture_matches_pbrt(tmp_path):
     (tmp_path / "swapped.pbrt").write_text(text)
     other, other_var = ours(load_scene(tmp_path / "swapped.pbrt"))
     assert chi(other, other_var, ref, ref_var) > DISTINCT
+
+
+def test_loop_subdivision_surfaces_match_pbrt(tmp_path):
+    """shape_loopsubdiv.pbrt: an open box (boundary rules) and an icosahedral one-sided emitter,
+    which pbrt's inward limit normals leave dark outside; made two-sided it no longer matches."""
+    img, var = ours_of("shape_loopsubdiv")
+    ref, ref_var = reference("shape_loopsubdiv")
+    assert chi(img, var, ref, ref_var) < CHI
+    np.testing.assert_allclose(img.mean((0, 1)), ref.mean((0, 1)), rtol=MEAN_TOL)
+    text = (DATA / "shape_loopsubdiv.pbrt").read_text().replace('AreaLightSource "diffuse"',
+                                                                'AreaLightSource "diffuse" "bool twosided" true')
+    (tmp_path / "twosided.pbrt").write_text(text)
+    other, other_var = ours(load_scene(tmp_path / "twosided.pbrt"))
+    assert chi(other, other_var, ref, ref_var) > DISTINCT
+
+
+def test_killeroo_simple_loads_as_pbrt_builds_it():
+    """pbrt-v4-scenes' killeroo-simple: each killeroo one level of Loop subdivision of its 8316
+    control triangles, the two copies sharing one mesh."""
+    scene = load_scene(DATA / "killeroo_simple.pbrt")
+    killeroos = [m for m in scene.meshes if m.name == "loopsubdiv"]
+    assert len(killeroos) == 1 and len(killeroos[0].indices) == 4 * 8316
+
+
+@pytest.mark.xfail(strict=True, reason="next-event shadow rays from big triangles stop short of the light only by "
+                   "a margin their origin offset eats (the floor up to 94% too dark near the camera); and the "
+                   "directly seen sphere light is 11% brighter than pbrt's: docs/pbrt-v4.md")
+def test_killeroo_simple_matches_pbrt():
+    img, var = ours_of("killeroo_simple")
+    ref, ref_var = reference("killeroo_simple")
+    assert chi(img, var, ref, ref_var) < CHI
+    np.testing.assert_allclose(img.mean((0, 1)), ref.mean((0, 1)), rtol=MEAN_TOL)

@@ -70,14 +70,14 @@ def test_material_may_name_a_texture_defined_later_but_not_an_undefined_one(tmp_
 def test_every_unsupported_thing_is_reported_at_load_in_one_error(tmp_path):
     path = write(tmp_path, HEAD + 'Texture "w" "float" "wrinkled"\n'
                                   'MakeNamedMaterial "c" "string type" "measured"\n'
-                                  'NamedMaterial "c"\nShape "loopsubdiv"\nShape "sphere"\n'
+                                  'NamedMaterial "c"\nShape "curve"\nShape "sphere"\n'
                                   'Material "diffuse" "texture reflectance" "w"\nShape "sphere"\n'
                                   'Material "diffuse" "texture reflectance" "gone"\nShape "disk"\n'
                                   'LightSource "goniometric"\n')
     with pytest.raises(SceneErrors) as info:
         load_description(path)
     lines = [e.loc.line for e in info.value.errors]
-    # wrinkled, measured, loopsubdiv, the undefined texture, goniometric: not the follow-ons of a
+    # wrinkled, measured, curve, the undefined texture, goniometric: not the follow-ons of a
     # refused texture or named material
     assert lines == [3, 4, 6, 12, 10], [str(e) for e in info.value.errors]
 

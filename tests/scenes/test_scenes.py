@@ -31,7 +31,7 @@ def staged(tmp_path_factory) -> Path:
 
 
 def test_known_scenes_are_all_here():
-    assert {"demo", "props", "beach", "fig2_shell", "fig3_heightmaps", "fig8_bump"} <= set(SCENES)
+    assert {"demo", "props", "beach", "fig1_killeroos", "fig2_shell", "fig3_heightmaps", "fig8_bump"} <= set(SCENES)
 
 
 @pytest.mark.parametrize("name", SCENES)
