@@ -158,7 +158,10 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
                         f = f * wp.abs(wi_l[2])
                         if max3(f) > 0.0:
                             origin = offset_origin(s, ls.wi)
-                            t_max = ls.dist * (1.0 - 1.0e-5) - ray_epsilon(s.p)
+                            # measured from the offset origin (on a 2 km triangle the offset is mm,
+                            # more than a fixed margin), stopping short by pbrt's ShadowEpsilon
+                            to_light = wp.dot(s.p + ls.wi * ls.dist - origin, ls.wi)
+                            t_max = to_light * (1.0 - 1.0e-4) - ray_epsilon(s.p)
                             n_rays += 1
                             if not occluded(scene.geo, origin, ls.wi, t_max):
                                 w = float(1.0)
