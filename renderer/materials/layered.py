@@ -19,9 +19,10 @@ directions and of the BSDF's per-sample ``wavelength_u``, so the same seed rende
 and two samples of one pixel use independent walks.
 
 Interfaces are chosen by a small integer kind (Warp has no function pointers): ``iface_eval``,
-``iface_sample`` and ``iface_specular`` are the only places that branch on it. A new top interface
-(a thin film or a multilayer stack, whose Fresnel term is an RGB R and T per direction) is a new
-kind there and a field or two in :class:`Interface`; the walk does not change.
+``iface_sample`` and ``iface_specular`` are the only places that branch on it. FILM is a thin film
+or multilayer stack (``thinfilm``'s coating, :mod:`.coating`) whose Fresnel term is an RGB R and T
+per direction: smooth, it reflects with probability mean(R) / (mean R + mean T); rough, it is the
+GGX pair with those R and T at the half-vector.
 """
 from __future__ import annotations
 
@@ -31,6 +32,7 @@ import warp as wp
 
 from renderer.materials.bsdf import (DIFFUSE, FIRST_DERIVED_FLAG, GLOSSY, REFLECTION, SPECULAR, TRANSMISSION,
                                      BSDFEval, BSDFSample, failed_sample)
+from renderer.materials.coating import Coating, coating_eval, coating_sample
 from renderer.materials.conductor import conductor_eval, conductor_sample
 from renderer.materials.dielectric import dielectric_eval, dielectric_sample
 from renderer.materials.diffuse import lambert_eval, lambert_sample
@@ -45,6 +47,7 @@ from renderer.vecmath import PI, max3
 DIELECTRIC = wp.constant(0)   # eta (eta[0]) over alpha: pbrt's DielectricBxDF
 LAMBERT = wp.constant(1)      # albedo: pbrt's DiffuseBxDF
 CONDUCTOR = wp.constant(2)    # eta + i k over alpha: pbrt's ConductorBxDF
+FILM = wp.constant(3)         # coat on a substrate of relative index eta[0], over alpha
 
 BOTH = wp.constant(REFLECTION | TRANSMISSION)
 #: Smallest slab thickness (pbrt: the smallest normal float), so a thickness of 0 stays defined.
@@ -79,8 +82,9 @@ class Interface:
     kind: int
     eta: wp.vec3        # DIELECTRIC: eta[0], inside over outside; CONDUCTOR: eta relative to the slab
     k: wp.vec3          # CONDUCTOR
-    alpha: wp.vec2      # DIELECTRIC, CONDUCTOR: GGX roughness
+    alpha: wp.vec2      # DIELECTRIC, CONDUCTOR, FILM: GGX roughness
     albedo: wp.vec3     # LAMBERT
+    coat: Coating       # FILM (its substrate must be clear)
 
 
 @wp.struct
@@ -116,6 +120,8 @@ def iface_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: boo
     """f(wo, wi) and the density of ``iface_sample`` restricted to ``sides``."""
     if s.kind == DIELECTRIC:
         return dielectric_eval(s.eta[0], s.alpha, wo, wi, sides, radiance)
+    if s.kind == FILM:
+        return coating_eval(s.coat, s.eta[0], s.alpha, wo, wi, sides, radiance)
     e = BSDFEval()
     if (sides & REFLECTION) == 0:
         return e
@@ -131,6 +137,8 @@ def iface_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bo
     """A direction from the interface's lobes on ``sides`` (pbrt's BxDFReflTransFlags)."""
     if s.kind == DIELECTRIC:
         return dielectric_sample(s.eta[0], s.alpha, wo, u, sides, radiance)
+    if s.kind == FILM:
+        return coating_sample(s.coat, s.eta[0], s.alpha, wo, u, sides, radiance)
     if (sides & REFLECTION) == 0:
         return failed_sample()
     if s.kind == LAMBERT:

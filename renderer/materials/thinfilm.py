@@ -20,6 +20,12 @@ observer (``spectral:N``, the render option). Lobes:
   f = reflectance (1 − R(wo)) (1 − R(wi)) / π: light must cross the film on the way in and on
   the way out, which keeps it reciprocal and energy conserving (R + (1 − R)·reflectance ≤ 1);
   light the film reflects back down into the substrate is dropped (a slight darkening).
+* ``layered`` true: the same opaque substrate with every interreflection, by pbrt-v4's layered
+  random walk (:mod:`.layered`) with the coating as its top interface (kind FILM) over the
+  Lambertian base, no medium between them; ``maxdepth`` and ``nsamples`` are the walk's.
+* ``tint`` (clear substrate): Beer–Lambert in a thin parallel slab, tint being the transmittance
+  of one pass at normal incidence; each vertex charges tint^(1/(2|cos θ|)) for each of wo and wi
+  that lies inside, so a pass in and out pays tint^(1/cos θ) and the BSDF stays reciprocal.
 * ``roughness`` (pbrt's ``uroughness``/``vroughness``/``remaproughness``, as ``dielectric``): the
   delta lobes become GGX microfacet lobes sampled by visible normals, each facet carrying the
   coating, so R and T are the coating's spectral Fresnel at the half-vector (reflection and
@@ -36,11 +42,13 @@ from renderer.errors import Location, SceneError
 from renderer.materials.bsdf import (BSDF, DIFFUSE, GLOSSY, REFLECTION, SPECULAR, TRANSMISSION, BSDFEval,
                                      BSDFSample, delta_sample, failed_sample, reflect_z, refract, same_hemisphere,
                                      sampled, signed_z)
-from renderer.materials.microfacet import (ROUGHNESS_PARAMS, ggx_D, ggx_G, ggx_sample_visible, ggx_visible_pdf,
-                                           half_vector, is_smooth, resolve_roughness, roughness_to_alpha)
+from renderer.materials.coating import (BOTH_SIDES, Coating, coating_eval, coating_rgb, coating_sample,
+                                        glossy_reflection, mean3)
+from renderer.materials.layered import (FILM, LAMBERT, SLAB_PARAMS, Interface, Slab, layered_eval_pdf,
+                                        layered_sample, make_slab, walk_flags)
+from renderer.materials.microfacet import (ROUGHNESS_PARAMS, ggx_sample_visible, is_smooth, resolve_roughness,
+                                           roughness_to_alpha)
 from renderer.materials.stack import STACK_PARAMS, resolve_stack, stack_rows
-from renderer.optics.multilayer import multilayer_rgb3, multilayer_rgb_sampled
-from renderer.optics.thin_film import thin_film_rgb3, thin_film_rgb_sampled
 from renderer.parameters import Parameter, Parameters
 from renderer.sampling.warps import cosine_hemisphere
 from renderer.vecmath import INV_PI, max3
@@ -55,8 +63,13 @@ PARAMS = Parameters(
     Parameter("thicknessmap", "float", 0.0, texture=True, doc="added to the thickness, times thicknessscale (nm)"),
     Parameter("thicknessscale", "float", 1.0, doc="factor of thicknessmap"),
     Parameter("transmission", "bool", False, doc="a clear substrate refracts what the film transmits"),
+    Parameter("tint", "rgb", 1.0, 0.0, 1.0, texture=True,
+              doc="clear substrate: internal transmittance of one pass through the lens at normal incidence"),
     Parameter("reflectance", "rgb", 0.0, 0.0, 1.0, texture=True,
               doc="albedo of an opaque substrate's Lambertian base"),
+    Parameter("layered", "bool", False, doc="opaque substrate: every interreflection between film and base "
+              "(pbrt-v4's layered random walk) instead of one pass"),
+    *(p for p in SLAB_PARAMS if p.name in ("maxdepth", "nsamples")),
     *STACK_PARAMS,
     *ROUGHNESS_PARAMS,
 )
@@ -65,11 +78,22 @@ FLAG = PARAMS.flags
 
 
 def resolve(values: dict[str, Any], loc: Location | None) -> tuple[dict[str, Any], int]:
-    """Refraction needs a substrate light can cross: no absorption and no diffuse base. A stack
+    """Refraction needs a substrate light can cross: no absorption and no diffuse base; the
+    layered walk needs a clear substrate over its base, which it cannot refract out of. A stack
     (see :mod:`renderer.materials.stack`) replaces eta_film and derives its total thickness."""
     if values.get("transmission") and (values.get("k_inner", 0.0) > 0.0 or "reflectance" in values):
         raise SceneError('thinfilm: "transmission" needs a clear substrate (no "k_inner", no "reflectance")', loc)
-    return resolve_roughness(resolve_stack(values, loc)), 0
+    if "tint" in values and not values.get("transmission"):
+        raise SceneError('thinfilm: "tint" colours a clear substrate, which needs "transmission" true', loc)
+    if values.get("layered") and (values.get("transmission") or values.get("k_inner", 0.0) > 0.0):
+        raise SceneError('thinfilm: "layered" puts a Lambertian base under a clear substrate: it excludes '
+                         '"transmission" and "k_inner"', loc)
+    walk = [n for n in ("maxdepth", "nsamples") if n in values]
+    if walk and not values.get("layered"):
+        raise SceneError(f'thinfilm: {" and ".join(walk)} belong to the layered walk, which needs "layered" true',
+                         loc)
+    flags = walk_flags(values) if values.get("layered") else 0
+    return resolve_roughness(resolve_stack(values, loc)), flags
 
 
 def layer_rows(values: dict[str, Any], loc: Location | None) -> np.ndarray:
@@ -83,55 +107,75 @@ def _transmissive(b: BSDF) -> bool:
 
 
 @wp.func
+def _layered(b: BSDF) -> bool:
+    return (b.flags & FLAG.layered) != 0
+
+
+@wp.func
+def film_coating(b: BSDF) -> Coating:
+    """The coating of this material's parameters (see :mod:`renderer.materials.coating`); the
+    substrate is crossed with ``transmission`` and under the layered walk."""
+    c = Coating()
+    c.n_outer = b.p[SLOT.eta_outer][0]
+    c.n_film = b.p[SLOT.eta_film][0]
+    c.n_inner = wp.vec2(b.p[SLOT.eta_inner][0], b.p[SLOT.k_inner][0])
+    c.d = wp.max(b.p[SLOT.thickness][0] + b.p[SLOT.thicknessscale][0] * b.p[SLOT.thicknessmap][0], 0.0)
+    c.total = b.p[SLOT.thickness][0]
+    c.clear = _transmissive(b) or _layered(b)
+    c.balanced = _layered(b)
+    c.layers = b.layers
+    c.layer_first = b.layer_first
+    c.layer_count = b.layer_count
+    c.spectral_n = b.spectral_n
+    c.wavelength_u = b.wavelength_u
+    c.spectral = b.spectral
+    return c
+
+
+@wp.func
+def coating_RT(b: BSDF, cos_w: float):
+    """RGB (R, T) of the coating for light arriving at cosine cos_w to its normal (negative: from
+    the substrate side): :func:`renderer.materials.coating.coating_rgb`."""
+    return coating_rgb(film_coating(b), cos_w)
+
+
+@wp.func
 def film_reflect_transmit(b: BSDF, w: wp.vec3):
     """RGB (R, T) of the coating for light arriving along w (see :func:`coating_RT`)."""
     return coating_RT(b, w[2])
 
 
 @wp.func
-def coating_RT(b: BSDF, cos_w: float):
-    """RGB (R, T) of the coating for light arriving at cosine cos_w to its normal (negative: from
-    the substrate side), each clipped to [0, 1]: a film colour outside the sRGB gamut has a negative
-    channel, which a path's throughput must not carry. Rough lobes pass the cosine to the
-    microfacet normal.
-
-    R + T is not clipped. With rgb3 it is 1 to float precision for lossless media; with
-    spectral:N it is the jittered estimate of white, 1 ± 1e-3 at N = 32 and exactly 1 on average,
-    so clipping the sum would bias every image darker (about 0.3 % in a glass-sphere furnace)."""
-    n0 = b.p[SLOT.eta_outer][0]
-    n2 = wp.vec2(b.p[SLOT.eta_inner][0], b.p[SLOT.k_inner][0])
-    if cos_w < 0.0 and _transmissive(b):
-        n0 = b.p[SLOT.eta_inner][0]
-        n2 = wp.vec2(b.p[SLOT.eta_outer][0], 0.0)
-    n1 = wp.vec2(b.p[SLOT.eta_film][0], 0.0)
-    d = wp.max(b.p[SLOT.thickness][0] + b.p[SLOT.thicknessscale][0] * b.p[SLOT.thicknessmap][0], 0.0)
-    cos0 = wp.abs(cos_w)
-    r = wp.vec3(0.0)
-    t = wp.vec3(0.0)
-    if b.layer_count > 0:
-        # a stack: d is its mapped total thickness, which scales every layer alike
-        total = b.p[SLOT.thickness][0]
-        scale = wp.where(total > 0.0, d / total, 1.0)
-        back = cos_w < 0.0 and _transmissive(b)
-        if b.spectral_n > 0:
-            r, t = multilayer_rgb_sampled(cos0, n0, n2, b.layers, b.layer_first, b.layer_count, back, scale,
-                                          b.spectral_n, b.wavelength_u, b.spectral)
-        else:
-            r, t = multilayer_rgb3(cos0, n0, n2, b.layers, b.layer_first, b.layer_count, back, scale)
-    elif b.spectral_n > 0:
-        r, t = thin_film_rgb_sampled(cos0, n0, n1, n2, d, b.spectral_n, b.wavelength_u, b.spectral)
-    else:
-        r, t = thin_film_rgb3(cos0, n0, n1, n2, d)
-    r = wp.min(wp.max(r, wp.vec3(0.0)), wp.vec3(1.0))
-    t = wp.min(wp.max(t, wp.vec3(0.0)), wp.vec3(1.0))
-    if not _transmissive(b):
-        t = wp.vec3(0.0)
-    return r, t
+def _tinted(b: BSDF, v: wp.vec3, wo: wp.vec3, wi: wp.vec3) -> wp.vec3:
+    """v times the tinted substrate's internal transmittance charged at this vertex: tint^x with
+    x = Σ 1/(2 |cos θ|) over wo and wi where they lie inside (see docs/thinfilm.md)."""
+    tint = b.p[SLOT.tint]
+    if tint == wp.vec3(1.0):
+        return v
+    x = float(0.0)
+    if wo[2] < 0.0:
+        x += 0.5 / wp.max(-wo[2], 1.0e-6)
+    if wi[2] < 0.0:
+        x += 0.5 / wp.max(-wi[2], 1.0e-6)
+    if x == 0.0:
+        return v
+    tint = wp.min(wp.max(tint, wp.vec3(0.0)), wp.vec3(1.0))
+    return wp.cw_mul(v, wp.vec3(wp.pow(tint[0], x), wp.pow(tint[1], x), wp.pow(tint[2], x)))
 
 
 @wp.func
-def _mean(v: wp.vec3) -> float:
-    return (v[0] + v[1] + v[2]) / 3.0
+def _slab(b: BSDF) -> Slab:
+    """The layered walk's slab: the coating on top, the Lambertian base right under the clear
+    substrate (no medium between them: optical thickness 0)."""
+    top = Interface()
+    top.kind = FILM
+    top.eta = wp.vec3(_eta(b))
+    top.alpha = _alpha(b)
+    top.coat = film_coating(b)
+    base = Interface()
+    base.kind = LAMBERT
+    base.albedo = b.p[SLOT.reflectance]
+    return make_slab(top, base, 0.0, wp.vec3(0.0), 0.0, b.flags, b.wavelength_u)
 
 
 @wp.func
@@ -145,6 +189,8 @@ def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
     """The substrate lobe (the delta lobes have no value or density here): f from the film at wo
     and at wi, the density its selection probability in ``sample`` times cos/π. The film at wo
     is evaluated once for both."""
+    if _layered(b):
+        return layered_eval_pdf(_slab(b), wo, wi)
     alpha = _alpha(b)
     if not is_smooth(alpha):
         return _rough_eval_pdf(b, wo, wi, alpha)
@@ -155,8 +201,8 @@ def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
     r_i, t_i = film_reflect_transmit(b, wi)
     base = _base_lobe(b, r_o)
     e.f = wp.cw_mul(base, wp.vec3(1.0) - r_i) * INV_PI
-    p_base = _mean(base)
-    total = _mean(r_o) + _mean(t_o) + p_base
+    p_base = mean3(base)
+    total = mean3(r_o) + mean3(t_o) + p_base
     if total > 0.0:
         e.pdf = p_base / total * wp.abs(wi[2]) * INV_PI
     return e
@@ -165,32 +211,34 @@ def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
 @wp.func
 def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
     """Pick the mirror, the refraction or the substrate in proportion to their mean RGB albedo."""
+    if _layered(b):
+        return layered_sample(_slab(b), wo, u)
     alpha = _alpha(b)
     if not is_smooth(alpha):
         return _rough_sample(b, wo, u, alpha)
     r, t = film_reflect_transmit(b, wo)
     base = _base_lobe(b, r)
-    p_r = _mean(r)
-    p_t = _mean(t)
-    total = p_r + p_t + _mean(base)
+    p_r = mean3(r)
+    p_t = mean3(t)
+    total = p_r + p_t + mean3(base)
     if total <= 0.0:
         return failed_sample()
     p_r = p_r / total
     p_t = p_t / total
     if u[2] < p_r:
-        return delta_sample(reflect_z(wo), r / p_r, p_r, REFLECTION | SPECULAR)
+        return delta_sample(reflect_z(wo), _tinted(b, r / p_r, wo, reflect_z(wo)), p_r, REFLECTION | SPECULAR)
     if u[2] < p_r + p_t:
         refr = refract(wo, wp.vec3(0.0, 0.0, 1.0), b.p[SLOT.eta_inner][0] / b.p[SLOT.eta_outer][0])
         if refr[3] == 0.0:
             return failed_sample()
-        s = delta_sample(wp.vec3(refr[0], refr[1], refr[2]), t / (p_t * refr[3] * refr[3]), p_t,
-                         TRANSMISSION | SPECULAR)
+        wt = wp.vec3(refr[0], refr[1], refr[2])
+        s = delta_sample(wt, _tinted(b, t / (p_t * refr[3] * refr[3]), wo, wt), p_t, TRANSMISSION | SPECULAR)
         s.eta = refr[3]
         return s
     wi = cosine_hemisphere(wp.vec2(u[0], u[1]))
     if wo[2] < 0.0:
         wi = wp.vec3(wi[0], wi[1], -wi[2])
-    p_base = _mean(base) / total
+    p_base = mean3(base) / total
     s = BSDFSample()
     s.pdf = p_base * wp.abs(wi[2]) * INV_PI
     if s.pdf <= 0.0:
@@ -219,46 +267,11 @@ def _eta(b: BSDF) -> float:
 
 
 @wp.func
-def _glossy_reflection(wo: wp.vec3, wi: wp.vec3, wm: wp.vec3, r: wp.vec3, alpha: wp.vec2) -> BSDFEval:
-    """D G R / (4 |cos θo cos θi|) and the visible-normal density of wi (no lobe choice)."""
-    e = BSDFEval()
-    e.f = r * (ggx_D(wm, alpha) * ggx_G(wo, wi, alpha) / wp.abs(4.0 * wi[2] * wo[2]))
-    e.pdf = ggx_visible_pdf(wo, wm, alpha) / (4.0 * wp.abs(wp.dot(wo, wm)))
-    return e
-
-
-@wp.func
-def _rough_clear_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3, alpha: wp.vec2) -> BSDFEval:
-    """A rough coated clear substrate: Walter et al.'s BSDF with the coating's RGB R and T in
-    place of F and 1 − F; reflection or refraction picked by their mean at the facet."""
-    e = BSDFEval()
-    h = half_vector(wo, wi, _eta(b))
-    if h[3] == 0.0:
-        return e
-    wm = wp.vec3(h[0], h[1], h[2])
-    etap = h[3]
-    r, t = coating_RT(b, wp.dot(wo, wm))
-    total = _mean(r) + _mean(t)
-    if total <= 0.0:
-        return e
-    if wo[2] * wi[2] > 0.0:
-        e = _glossy_reflection(wo, wi, wm, r, alpha)
-        e.pdf = e.pdf * _mean(r) / total
-        return e
-    denom = wp.dot(wi, wm) + wp.dot(wo, wm) / etap
-    denom2 = denom * denom
-    g = ggx_D(wm, alpha) * ggx_G(wo, wi, alpha) * wp.abs(wp.dot(wi, wm) * wp.dot(wo, wm) / (denom2 * wi[2] * wo[2]))
-    e.f = t * (g / (etap * etap))
-    e.pdf = ggx_visible_pdf(wo, wm, alpha) * wp.abs(wp.dot(wi, wm)) / denom2 * _mean(t) / total
-    return e
-
-
-@wp.func
 def _specular_share(b: BSDF, r_o: wp.vec3, base: wp.vec3) -> float:
     """Probability of the glossy lobe over an opaque substrate: the coating's mean R at the
     macroscopic normal against the substrate's share (it depends on wo only)."""
-    total = _mean(r_o) + _mean(base)
-    return wp.where(total > 0.0, _mean(r_o) / total, 0.0)
+    total = mean3(r_o) + mean3(base)
+    return wp.where(total > 0.0, mean3(r_o) / total, 0.0)
 
 
 @wp.func
@@ -277,7 +290,7 @@ def _rough_opaque_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3, alpha: wp.vec2) ->
     p_spec = _specular_share(b, r_o, base)
     wm = wp.normalize(o + i)
     r_m, t_m = coating_RT(b, wp.dot(o, wm))
-    e = _glossy_reflection(o, i, wm, r_m, alpha)
+    e = glossy_reflection(o, i, wm, r_m, alpha)
     e.pdf = e.pdf * p_spec
     if max3(b.p[SLOT.reflectance]) > 0.0:
         r_i, t_i = coating_RT(b, i[2])
@@ -289,7 +302,9 @@ def _rough_opaque_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3, alpha: wp.vec2) ->
 @wp.func
 def _rough_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3, alpha: wp.vec2) -> BSDFEval:
     if _transmissive(b):
-        return _rough_clear_eval_pdf(b, wo, wi, alpha)
+        e = coating_eval(film_coating(b), _eta(b), alpha, wo, wi, BOTH_SIDES, True)
+        e.f = _tinted(b, e.f, wo, wi)
+        return e
     return _rough_opaque_eval_pdf(b, wo, wi, alpha)
 
 
@@ -298,28 +313,14 @@ def _rough_sample(b: BSDF, wo: wp.vec3, u: wp.vec3, alpha: wp.vec2) -> BSDFSampl
     """A visible microfacet normal, then reflection or refraction by the coating's mean R and T
     there (clear substrate), or the glossy lobe or the substrate by their shares (opaque)."""
     if _transmissive(b):
-        wm = ggx_sample_visible(wo, alpha, wp.vec2(u[0], u[1]))
-        r, t = coating_RT(b, wp.dot(wo, wm))
-        total = _mean(r) + _mean(t)
-        if total <= 0.0:
-            return failed_sample()
-        if u[2] * total < _mean(r):
-            wi = wm * (2.0 * wp.dot(wo, wm)) - wo
-            if wi[2] * wo[2] <= 0.0:
-                return failed_sample()
-            return sampled(wo, wi, _rough_clear_eval_pdf(b, wo, wi, alpha), GLOSSY)
-        refr = refract(wo, wm, _eta(b))
-        wt = wp.vec3(refr[0], refr[1], refr[2])
-        if refr[3] == 0.0 or wt[2] * wo[2] >= 0.0:
-            return failed_sample()
-        s = sampled(wo, wt, _rough_clear_eval_pdf(b, wo, wt, alpha), GLOSSY)
-        s.eta = refr[3]
+        s = coating_sample(film_coating(b), _eta(b), alpha, wo, u, BOTH_SIDES, True)
+        s.weight = _tinted(b, s.weight, wo, s.wi)
         return s
     sgn = wp.where(wo[2] < 0.0, -1.0, 1.0)
     o = signed_z(wo, sgn)
     r_o, t_o = coating_RT(b, o[2])
     base = _base_lobe(b, r_o)
-    if _mean(r_o) + _mean(base) <= 0.0:
+    if mean3(r_o) + mean3(base) <= 0.0:
         return failed_sample()
     lobe = DIFFUSE
     i = cosine_hemisphere(wp.vec2(u[0], u[1]))

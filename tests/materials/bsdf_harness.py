@@ -98,7 +98,7 @@ def bsdf_moments(name: str, values: dict[str, Any], wo, n: int = 400_000, seed: 
     given constant parameter values (defaults for the rest)."""
     out = wp.zeros((n, 4), dtype=wp.vec3, device="cpu")
     wp.launch(_kernel(name), dim=n, inputs=[*_bsdf_inputs(name, values), _unit(wo), seed, out], device="cpu")
-    o = out.numpy()
+    o = out.numpy().astype(np.float64)   # float32 sums of 1e5+ weights drift by 1e-3
     ok = o[:, 3, 2] > 0
     nonspec = ok & ((o[:, 3, 1].astype(int) & SPECULAR) == 0)
     return {"pdf_integral": o[:, 0, 0].mean(), "albedo_uniform": o[:, 1].mean(axis=0),
@@ -196,7 +196,7 @@ def mean_f(name: str, values: dict[str, Any], pairs: list[tuple], n: int = 4000,
     out = wp.zeros((len(pairs), n), dtype=wp.vec3, device="cpu")
     wp.launch(_mean_f_kernel(name), dim=(len(pairs), n), inputs=[*_bsdf_inputs(name, values), wo, wi, seed, out],
               device="cpu")
-    o = out.numpy()
+    o = out.numpy().astype(np.float64)
     return o.mean(axis=1), o.std(axis=1) / np.sqrt(n)
 
 

@@ -24,6 +24,8 @@ CASES = {
     "clear film": dict(eta_film=1.33, thickness=400.0, eta_inner=1.5, transmission=True, roughness=0.3),
     "opaque film": dict(eta_film=1.55, thickness=500.0, eta_inner=1.66, reflectance=0.5, roughness=0.3),
     "black metal-backed film": dict(eta_film=1.4, thickness=300.0, eta_inner=0.2, k_inner=3.0, roughness=0.2),
+    "tinted clear film": dict(eta_film=1.33, thickness=400.0, eta_inner=1.5, transmission=True, roughness=0.3,
+                              tint=(0.7, 0.4, 0.1)),
     "clear stack, anisotropic": dict(layer_eta=[2.4, 1.46], layer_thickness=[57.3, 94.2], repeat=3, eta_inner=1.52,
                                      transmission=True, uroughness=0.1, vroughness=0.4),
 }
