@@ -69,13 +69,19 @@ def test_cluster_equals_one_process_bit_for_bit(local_ray, scene_file, reference
     np.testing.assert_array_equal(img, reference)
 
 
-def _kill_a_running_task(render: Future) -> tuple[int, str]:
-    """Kill (SIGKILL) the worker process of the first render task seen running; its pid and task id."""
+def _tasks() -> list:
+    """Every task of this test's Ray instance (named by its address: another instance on the same
+    machine, say a second test run, would make Ray's own lookup refuse to choose)."""
     from ray.util.state import list_tasks
 
+    return list_tasks(address=ray.get_runtime_context().gcs_address, detail=True, limit=10_000)
+
+
+def _kill_a_running_task(render: Future) -> tuple[int, str]:
+    """Kill (SIGKILL) the worker process of the first render task seen running; its pid and task id."""
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and not render.done():
-        running = [t for t in list_tasks(detail=True, limit=10_000)
+        running = [t for t in _tasks()
                    if t.func_or_class_name == "render_range" and t.state == "RUNNING" and t.worker_pid]
         if running:
             os.kill(running[0].worker_pid, signal.SIGKILL)
@@ -88,8 +94,6 @@ def _kill_a_running_task(render: Future) -> tuple[int, str]:
 def test_a_killed_worker_costs_only_its_task(local_ray, scene_file):
     """Two tasks of 160 spp at 96x64 run for seconds; one worker is killed mid-task, its task is
     retried and the image is still the one-process image."""
-    from ray.util.state import list_tasks
-
     scene = renderer.load_scene(scene_file)
     settings = settings_for(scene, width=96, height=64)
     whole = RenderSession(scene, settings)
@@ -99,7 +103,7 @@ def test_a_killed_worker_costs_only_its_task(local_ray, scene_file):
         running = pool.submit(render.run, 320)
         pid, task = _kill_a_running_task(running)
         running.result(timeout=240)
-    attempts = [t.attempt_number for t in list_tasks(detail=True, limit=10_000) if t.task_id == task]
+    attempts = [t.attempt_number for t in _tasks() if t.task_id == task]
     assert max(attempts) >= 1, f"the task of killed worker {pid} was not retried: attempts {attempts}"
     assert render.film.spp == 320
     np.testing.assert_array_equal(render.image(), whole.image())

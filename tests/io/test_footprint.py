@@ -26,9 +26,12 @@ print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024)
 
 
 def _peak_bytes(path: Path) -> int:
-    run = subprocess.run([sys.executable, "-c", PEAK, str(path)], capture_output=True, text=True, cwd=ROOT,
-                         timeout=600)
-    assert run.returncode == 0, run.stderr
+    """The peak resident memory of a process that uploads the scene: the second of two runs, so a
+    cold kernel cache's compile (hundreds of MB inside clang, once per machine) is not counted."""
+    for _ in range(2):
+        run = subprocess.run([sys.executable, "-c", PEAK, str(path)], capture_output=True, text=True, cwd=ROOT,
+                             timeout=600)
+        assert run.returncode == 0, run.stderr
     return int(run.stdout.split()[-1])
 
 
