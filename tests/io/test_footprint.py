@@ -16,12 +16,15 @@ from renderer.device.footprint import estimate, image_size
 ROOT = Path(__file__).resolve().parents[2]
 HEAD = 'Camera "perspective"\nFilm "rgb" "integer xresolution" [{w}] "integer yresolution" [{h}]\nWorldBegin\n'
 
-PEAK = """import resource, sys
+#: The peak is VmHWM, this process's own high-water mark: Linux carries getrusage's ru_maxrss over
+#: fork and exec, so a child of a large test process would report its parent's size.
+PEAK = """import sys
 from renderer.api import load_scene
 from renderer.device.scene import upload
 from renderer.device.film import Film
 desc = load_scene(sys.argv[1]); ds = upload(desc, "cpu"); film = Film(ds.width, ds.height, "cpu")
-print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024)
+hwm = [line for line in open("/proc/self/status") if line.startswith("VmHWM:")][0]
+print(int(hwm.split()[1]) * 1024)
 """
 
 
