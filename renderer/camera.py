@@ -56,16 +56,7 @@ def generate_ray(cam: Camera, px: float, py: float, u_lens: wp.vec2) -> Ray:
     if cam.projection >= EQUAL_AREA:
         return _spherical_ray(cam, (px + cam.origin[0]) / cam.full[0], (py + cam.origin[1]) / cam.full[1])
     d = wp.normalize(wp.vec3(sx, sy, 1.0))
-    o = wp.vec3(0.0)
-    if cam.lens_radius > 0.0:
-        lens = concentric_disk(u_lens) * cam.lens_radius
-        focus = d * (cam.focal_distance / d[2])
-        o = wp.vec3(lens[0], lens[1], 0.0)
-        d = wp.normalize(focus - o)
-    r = Ray()
-    r.o = wp.transform_point(cam.to_world, o)
-    r.d = wp.normalize(wp.transform_vector(cam.to_world, d))
-    return r
+    return _through_lens(cam, wp.vec3(0.0), d, d * (cam.focal_distance / d[2]), u_lens)
 
 
 @wp.func
@@ -74,14 +65,22 @@ def _orthographic_ray(cam: Camera, sx: float, sy: float, u_lens: wp.vec2) -> Ray
     origin, as pbrt writes it) towards the screen point's place on the plane of focus."""
     o = wp.vec3(sx, sy, 0.0)
     d = wp.vec3(0.0, 0.0, 1.0)
+    return _through_lens(cam, o, d, o + d * cam.focal_distance, u_lens)
+
+
+@wp.func
+def _through_lens(cam: Camera, o: wp.vec3, d: wp.vec3, focus: wp.vec3, u_lens: wp.vec2) -> Ray:
+    """The camera-space ray (o, d) in world space; with a thin lens it starts at a lens point and
+    passes through ``focus``, where (o, d) meets the plane of focus."""
+    start = o
+    direction = d
     if cam.lens_radius > 0.0:
         lens = concentric_disk(u_lens) * cam.lens_radius
-        focus = o + d * cam.focal_distance
-        o = wp.vec3(lens[0], lens[1], 0.0)
-        d = wp.normalize(focus - o)
+        start = wp.vec3(lens[0], lens[1], 0.0)
+        direction = wp.normalize(focus - start)
     r = Ray()
-    r.o = wp.transform_point(cam.to_world, o)
-    r.d = wp.normalize(wp.transform_vector(cam.to_world, d))
+    r.o = wp.transform_point(cam.to_world, start)
+    r.d = wp.normalize(wp.transform_vector(cam.to_world, direction))
     return r
 
 

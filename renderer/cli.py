@@ -15,6 +15,7 @@ import time
 import traceback
 import warnings
 from pathlib import Path
+from typing import Any, Callable
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_BAD_SAMPLES = 0, 2, 3
 #: --write-partial-images: how often the image is rewritten, in seconds.
@@ -75,24 +76,21 @@ def _aov_list(text: str) -> tuple[str, ...]:
     return names
 
 
-def _positive(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        v = 0
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"must be a whole number of at least 1, got {text!r}")
-    return v
+def _number(kind: type, ok: Callable[[Any], bool], what: str) -> Callable[[str], Any]:
+    """An argparse type: ``text`` as ``kind``, refused with "``what``, got ..." unless ``ok``."""
+    def parse(text: str) -> Any:
+        try:
+            v = kind(text)
+        except ValueError:
+            v = None
+        if v is None or not ok(v):
+            raise argparse.ArgumentTypeError(f"{what}, got {text!r}")
+        return v
+    return parse
 
 
-def _gib(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        v = float("nan")
-    if not 0.0 < v < 2.0**40:                        # also refuses nan and inf
-        raise argparse.ArgumentTypeError(f"memory limit must be a positive number of GiB, got {text!r}")
-    return v
+_positive = _number(int, lambda v: v >= 1, "must be a whole number of at least 1")
+_gib = _number(float, lambda v: 0.0 < v < 2.0**40, "memory limit must be a positive number of GiB")   # no nan, inf
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -43,3 +43,29 @@ def chi(img: np.ndarray, var: np.ndarray, ref: np.ndarray, ref_var: np.ndarray) 
 @lru_cache(maxsize=None)
 def ours_of(name: str) -> tuple[np.ndarray, np.ndarray]:
     return ours(load_scene(DATA / f"{name}.pbrt"))
+
+
+def assert_matches_pbrt(name: str, mean_tol: float = MEAN_TOL) -> tuple[np.ndarray, np.ndarray]:
+    """Ours against pbrt-v4's image of ``<name>.pbrt``: chi under CHI and per-channel means within
+    ``mean_tol``. Returns pbrt's mean and its variance, for a wrong variant to fail against."""
+    img, var = ours_of(name)
+    ref, ref_var = reference(name)
+    c = chi(img, var, ref, ref_var)
+    assert c < CHI, f"{name}: chi {c:.3f}"
+    np.testing.assert_allclose(img.mean((0, 1)), ref.mean((0, 1)), rtol=mean_tol)
+    return ref, ref_var
+
+
+def variant_chi(name: str, edits: list[tuple[str, str]], ref: np.ndarray, ref_var: np.ndarray, tmp: Path,
+                files: tuple[str, ...] = ()) -> float:
+    """chi against the reference of our render of ``<name>.pbrt`` with each (old, new) text edit
+    applied in order (``files`` it reads are copied beside it): a check has teeth when the wrong
+    variant fails it."""
+    text = (DATA / f"{name}.pbrt").read_text()
+    for old, new in edits:
+        text = text.replace(old, new)
+    for f in files:
+        (tmp / f).write_bytes((DATA / f).read_bytes())
+    (tmp / "variant.pbrt").write_text(text)
+    img, var = ours(load_scene(tmp / "variant.pbrt"))
+    return chi(img, var, ref, ref_var)

@@ -8,7 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pbrt_compare import CHI, DATA, DISTINCT, MEAN_TOL, chi, ours, ours_of, reference
+from pbrt_compare import (CHI, DATA, DISTINCT, MEAN_TOL, assert_matches_pbrt, chi, ours, ours_of, reference,
+                          variant_chi)
 from renderer.api import load_scene, render
 
 FILTERS = ["filter_box", "filter_gaussian", "filter_mitchell", "filter_sinc", "filter_triangle"]
@@ -16,11 +17,7 @@ FILTERS = ["filter_box", "filter_gaussian", "filter_mitchell", "filter_sinc", "f
 
 @pytest.mark.parametrize("name", FILTERS)
 def test_pixel_filters_match_pbrt(name):
-    img, var = ours_of(name)
-    ref, ref_var = reference(name)
-    c = chi(img, var, ref, ref_var)
-    assert c < CHI, f"{name}: chi {c:.3f}"
-    np.testing.assert_allclose(img.mean((0, 1)), ref.mean((0, 1)), rtol=MEAN_TOL)
+    assert_matches_pbrt(name)
 
 
 def test_the_filter_comparison_tells_the_filters_apart():
@@ -72,34 +69,19 @@ def test_max_component_value_clamps_like_pbrt_up_to_spectral_noise():
 def test_texture_mappings_and_invert_match_pbrt(tmp_path):
     """spherical, cylindrical, planar mappings and imagemap invert (texture_mappings.pbrt); with
     every mapping replaced by "uv" and invert off, the same comparison fails."""
-    img, var = ours_of("texture_mappings")
-    ref, ref_var = reference("texture_mappings")
-    assert chi(img, var, ref, ref_var) < CHI
-    np.testing.assert_allclose(img.mean((0, 1)), ref.mean((0, 1)), rtol=MEAN_TOL)
-    text = (DATA / "texture_mappings.pbrt").read_text()
-    for old in ('"string mapping" "spherical"', '"string mapping" "cylindrical"', '"string mapping" "planar"',
-                '"bool invert" true'):
-        text = text.replace(old, "")
-    (tmp_path / "grey_pattern.png").write_bytes((DATA / "grey_pattern.png").read_bytes())
-    (tmp_path / "uv.pbrt").write_text(text)
-    uv, uv_var = ours(load_scene(tmp_path / "uv.pbrt"))
-    assert chi(uv, uv_var, ref, ref_var) > DISTINCT
+    ref, ref_var = assert_matches_pbrt("texture_mappings")
+    uv = [(old, "") for old in ('"string mapping" "spherical"', '"string mapping" "cylindrical"',
+                                '"string mapping" "planar"', '"bool invert" true')]
+    assert variant_chi("texture_mappings", uv, ref, ref_var, tmp_path, ("grey_pattern.png",)) > DISTINCT
 
 
 def test_mix_directionmix_and_product_textures_match_pbrt(tmp_path):
     """texture_mix.pbrt; with each mix's two inputs swapped (pbrt weights tex2 by the amount in mix
     but tex1 by |n . dir| in directionmix), the comparison fails."""
-    img, var = ours_of("texture_mix")
-    ref, ref_var = reference("texture_mix")
-    assert chi(img, var, ref, ref_var) < CHI
-    np.testing.assert_allclose(img.mean((0, 1)), ref.mean((0, 1)), rtol=MEAN_TOL)
-    text = (DATA / "texture_mix.pbrt").read_text()
-    text = text.replace('"texture tex1" "img" "rgb tex2" [0.9 0.9 0.9]', '"rgb tex1" [0.9 0.9 0.9] "texture tex2" "img"')
-    text = text.replace('"texture tex1" "img" "rgb tex2" [0.15 0.15 0.15]', '"rgb tex1" [0.15 0.15 0.15] "texture tex2" "img"')
-    (tmp_path / "grey_pattern.png").write_bytes((DATA / "grey_pattern.png").read_bytes())
-    (tmp_path / "swapped.pbrt").write_text(text)
-    swapped, swapped_var = ours(load_scene(tmp_path / "swapped.pbrt"))
-    assert chi(swapped, swapped_var, ref, ref_var) > DISTINCT
+    ref, ref_var = assert_matches_pbrt("texture_mix")
+    swapped = [('"texture tex1" "img" "rgb tex2" [0.9 0.9 0.9]', '"rgb tex1" [0.9 0.9 0.9] "texture tex2" "img"'),
+               ('"texture tex1" "img" "rgb tex2" [0.15 0.15 0.15]', '"rgb tex1" [0.15 0.15 0.15] "texture tex2" "img"')]
+    assert variant_chi("texture_mix", swapped, ref, ref_var, tmp_path, ("grey_pattern.png",)) > DISTINCT
 
 
 def test_cylinders_match_pbrt(tmp_path):
@@ -116,10 +98,8 @@ def test_cylinders_match_pbrt(tmp_path):
     assert abs(area / (np.radians(250.0) * 0.5 * 1.2) - 1.0) < 2e-3
     outward = np.einsum("ij,ij->i", np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), p.mean(1) * [1, 1, 0])
     assert np.all(outward > 0.0)                    # wound along pbrt's cross(dp/du, dp/dv): outside
-    closed = DATA / "shape_cylinder.pbrt"                    # the partial cylinder closed: no longer a match
-    (tmp_path / "closed.pbrt").write_text(closed.read_text().replace('"float phimax" 250', ""))
-    img, var = ours(load_scene(tmp_path / "closed.pbrt"))
-    assert chi(img, var, ref, ref_var) > DISTINCT
+    closed = [('"float phimax" 250', "")]          # the partial cylinder closed: no longer a match
+    assert variant_chi("shape_cylinder", closed, ref, ref_var, tmp_path) > DISTINCT
 
 
 @pytest.mark.parametrize("name", ["camera_ortho", "camera_ortho_lens"])
@@ -127,59 +107,35 @@ def test_orthographic_camera_matches_pbrt(tmp_path, name):
     """The orthographic camera with pbrt's default screen window, and with a given one and a thin
     lens (whose rays pbrt starts at the lens point about the camera's origin); without the lens
     the second no longer matches."""
-    img, var = ours_of(name)
-    ref, ref_var = reference(name)
-    assert chi(img, var, ref, ref_var) < CHI
-    np.testing.assert_allclose(img.mean((0, 1)), ref.mean((0, 1)), rtol=MEAN_TOL)
+    ref, ref_var = assert_matches_pbrt(name)
     if name == "camera_ortho_lens":
-        text = (DATA / f"{name}.pbrt").read_text().replace('"float lensradius" 0.08', "")
-        (tmp_path / "pinhole.pbrt").write_text(text)
-        pin, pin_var = ours(load_scene(tmp_path / "pinhole.pbrt"))
-        assert chi(pin, pin_var, ref, ref_var) > DISTINCT
+        assert variant_chi(name, [('"float lensradius" 0.08', "")], ref, ref_var, tmp_path) > DISTINCT
 
 
 @pytest.mark.parametrize("name", ["camera_spherical", "camera_equirect"])
 def test_spherical_camera_matches_pbrt(tmp_path, name):
     """pbrt-v4's spherical camera, equal-area (its default) and equirectangular; each image fails
     against the other mapping's scene."""
-    img, var = ours_of(name)
-    ref, ref_var = reference(name)
-    assert chi(img, var, ref, ref_var) < CHI
-    np.testing.assert_allclose(img.mean((0, 1)), ref.mean((0, 1)), rtol=MEAN_TOL)
+    ref, ref_var = assert_matches_pbrt(name)
     if name == "camera_spherical":
-        text = (DATA / f"{name}.pbrt").read_text().replace('Camera "spherical"',
-                                                           'Camera "spherical" "string mapping" "equirectangular"')
-        (tmp_path / "equirect.pbrt").write_text(text)
-        other, other_var = ours(load_scene(tmp_path / "equirect.pbrt"))
-        assert chi(other, other_var, ref, ref_var) > DISTINCT
+        equirect = [('Camera "spherical"', 'Camera "spherical" "string mapping" "equirectangular"')]
+        assert variant_chi(name, equirect, ref, ref_var, tmp_path) > DISTINCT
 
 
 def test_bilerp_texture_matches_pbrt(tmp_path):
     """texture_bilerp.pbrt: bilerp with uv and planar mappings and as a mix's amount; with two
     corners swapped it no longer matches."""
-    img, var = ours_of("texture_bilerp")
-    ref, ref_var = reference("texture_bilerp")
-    assert chi(img, var, ref, ref_var) < CHI
-    np.testing.assert_allclose(img.mean((0, 1)), ref.mean((0, 1)), rtol=MEAN_TOL)
-    text = (DATA / "texture_bilerp.pbrt").read_text().replace('"rgb v00" [0.05 0.05 0.05] "rgb v01" [0.9 0.9 0.9]',
-                                                               '"rgb v00" [0.9 0.9 0.9] "rgb v01" [0.05 0.05 0.05]')
-    (tmp_path / "swapped.pbrt").write_text(text)
-    other, other_var = ours(load_scene(tmp_path / "swapped.pbrt"))
-    assert chi(other, other_var, ref, ref_var) > DISTINCT
+    ref, ref_var = assert_matches_pbrt("texture_bilerp")
+    swapped = [('"rgb v00" [0.05 0.05 0.05] "rgb v01" [0.9 0.9 0.9]', '"rgb v00" [0.9 0.9 0.9] "rgb v01" [0.05 0.05 0.05]')]
+    assert variant_chi("texture_bilerp", swapped, ref, ref_var, tmp_path) > DISTINCT
 
 
 def test_loop_subdivision_surfaces_match_pbrt(tmp_path):
     """shape_loopsubdiv.pbrt: an open box (boundary rules) and an icosahedral one-sided emitter,
     which pbrt's inward limit normals leave dark outside; made two-sided it no longer matches."""
-    img, var = ours_of("shape_loopsubdiv")
-    ref, ref_var = reference("shape_loopsubdiv")
-    assert chi(img, var, ref, ref_var) < CHI
-    np.testing.assert_allclose(img.mean((0, 1)), ref.mean((0, 1)), rtol=MEAN_TOL)
-    text = (DATA / "shape_loopsubdiv.pbrt").read_text().replace('AreaLightSource "diffuse"',
-                                                                'AreaLightSource "diffuse" "bool twosided" true')
-    (tmp_path / "twosided.pbrt").write_text(text)
-    other, other_var = ours(load_scene(tmp_path / "twosided.pbrt"))
-    assert chi(other, other_var, ref, ref_var) > DISTINCT
+    ref, ref_var = assert_matches_pbrt("shape_loopsubdiv")
+    twosided = [('AreaLightSource "diffuse"', 'AreaLightSource "diffuse" "bool twosided" true')]
+    assert variant_chi("shape_loopsubdiv", twosided, ref, ref_var, tmp_path) > DISTINCT
 
 
 def test_killeroo_simple_loads_as_pbrt_builds_it():
