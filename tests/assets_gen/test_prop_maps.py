@@ -93,7 +93,7 @@ def test_beach_prop_materials_load(props_scene):
     desc = load_description(props_scene)
     mats = {m.name: m for m in desc.materials}
     assert {n: mats[n].kind for n in ("lens", "frame", "shell", "nacre")} == \
-        {"lens": "thinfilm", "frame": "coateddiffuse", "shell": "coateddiffuse", "nacre": "thinfilm"}
+        {"lens": "thinfilm", "frame": "disney", "shell": "disney", "nacre": "thinfilm"}
     lens, nacre = mats["lens"].values, mats["nacre"].values
     assert len(lens["layer_eta"]) == 9 and lens["transmission"] and "thicknessmap" in lens
     assert max(lens["tint"]) < 0.3                                  # a sunglass tint, not clear glass
