@@ -21,6 +21,7 @@ GENERATORS: tuple[Generator, ...] = (
     lens_thickness.GENERATOR,
     shell.SHELL_HEIGHT,
     shell.SHELL_BUMP,
+    shell.SHELL_PIGMENT,
 )
 
 BY_NAME: dict[str, Generator] = {g.name: g for g in GENERATORS}

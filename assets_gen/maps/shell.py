@@ -1,6 +1,8 @@
-"""Shell maps (m) in the shell's (u apex-to-margin, v across) parameter square, the UVs
-`assets-gen seashell` writes: growth bands (height) and fine radial ribs or concentric ridges
-(bump). Bands and concentric ridges are lines of constant u, radial ribs lines of constant v."""
+"""Shell maps in the shell's (u apex-to-margin, v across) parameter square, the UVs
+`assets-gen seashell` writes: growth bands (height, m), fine radial ribs or concentric ridges
+(bump, m) and the outside's pigment (linear RGB reflectance). Bands and concentric ridges are lines
+of constant u, radial ribs and spiral colour bands lines of constant v. The pigment map with the
+height map's seed, size, bands and irregularity has its colour bands on the same growth bands."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -83,12 +85,58 @@ def _shell_grid(p: ShellMapParams, rng: np.random.Generator) -> tuple[np.ndarray
             np.clip(vv + p.waviness * wander_v(uu, vv), 0, 1))
 
 
+@dataclass(frozen=True)
+class ShellPigmentParams(ShellMapParams):
+    bands: int = param(14, "growth bands from apex to margin (as the height map's, to share them)")
+    irregularity: float = param(0.35, "relative spread of band widths (as the height map's)")
+    spiral_bands: int = param(4, "dark spiral bands across v (lines of constant v)")
+    light_lab: tuple[float, float, float] = param((92.0, 3.0, 11.0), "CIELAB of the pale ground colour")
+    dark_lab: tuple[float, float, float] = param((48.0, 20.0, 32.0), "CIELAB of the dark pigment")
+
+    def validate(self) -> None:
+        super().validate()
+        require(1 <= self.bands <= MAX_MAP, f"growth bands must be 1..{MAX_MAP} (one per texel of the largest map)")
+        require(0 <= self.irregularity <= 2, "irregularity must be between 0 and 2")
+        require(0 <= self.spiral_bands <= 64, "spiral bands must be 0..64")
+        for lab in (self.light_lab, self.dark_lab):
+            require(len(lab) == 3 and 0 <= lab[0] <= 100, f"a CIELAB colour is (L 0..100, a, b), got {lab}")
+
+
+def growth_bands(p: ShellHeightParams | ShellPigmentParams,
+                 rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(u, v, phase within the band, band index) per texel: the height and pigment maps draw these
+    first, so one seed gives both the same bands."""
+    u, v = _shell_grid(p, rng)
+    phase, idx = banded_phase(u, p.bands, p.irregularity, rng)
+    return u, v, phase, idx
+
+
+def shell_pigment(p: ShellPigmentParams, seed: int) -> np.ndarray:
+    """Linear-RGB reflectance (H, W, 3) of the outside: how much pigment each growth band laid down
+    (a random share per band, as the mantle's secretion varies with the season), a darker line at
+    each growth check, dark spiral bands and a faint mottle, blended between the two CIELAB colours
+    (perceptually even steps) and converted with scikit-image."""
+    from skimage.color import lab2rgb
+
+    from renderer.color.rgb import srgb_to_linear
+
+    rng = np.random.default_rng(seed)
+    u, v, phase, idx = growth_bands(p, rng)
+    per_band = rng.beta(1.5, 1.5, size=p.bands)
+    check = np.exp(-(phase / 0.05) ** 2) + np.exp(-((1.0 - phase) / 0.03) ** 2)
+    offset = rng.uniform(0.0, 1.0)
+    spiral = (0.5 + 0.5 * np.cos(2.0 * np.pi * (p.spiral_bands * v + offset))) ** 4 if p.spiral_bands else 0.0 * v
+    mottle = smooth_noise(rng, (0.0, 0.0), (1.0, 1.0), 0.03)(u, v)
+    dark = np.clip(0.05 + per_band[idx] * (0.15 + 0.85 * spiral) + 0.3 * check + 0.06 * mottle, 0.0, 1.0)
+    lab = (1.0 - dark)[..., None] * np.asarray(p.light_lab) + dark[..., None] * np.asarray(p.dark_lab)
+    return srgb_to_linear(np.clip(lab2rgb(lab), 0.0, 1.0))
+
+
 def shell_height(p: ShellHeightParams, seed: int) -> np.ndarray:
     """Height (m) of growth bands: the shell swells across each band and thins again at the growth
     check that ends it; band heights vary like the widths (a good and a poor season)."""
     rng = np.random.default_rng(seed)
-    u, _ = _shell_grid(p, rng)
-    phase, idx = banded_phase(u, p.bands, p.irregularity, rng)
+    _, _, phase, idx = growth_bands(p, rng)
     amp = p.band_height_mm * 1e-3 * rng.lognormal(0.0, p.irregularity * 0.5, size=p.bands)
     return amp[idx] * np.sin(np.pi * phase) ** 2
 
@@ -111,7 +159,24 @@ def write_bump(job: Job) -> list[str]:
     return write_map(job.stage, "shell_bump", shell_bump(job.params, job.seed), "m", job.preview)
 
 
+def write_pigment(job: Job) -> list[str]:
+    """``shell_pigment.exr`` (linear RGB) and optionally its sRGB preview."""
+    from PIL import Image
+
+    from renderer.color.rgb import linear_to_srgb
+    from renderer.io.images import write_exr
+
+    rgb = shell_pigment(job.params, job.seed)
+    write_exr(job.stage / "shell_pigment.exr", rgb.astype(np.float32), {"units": "reflectance"})
+    if not job.preview:
+        return ["shell_pigment.exr"]
+    Image.fromarray((linear_to_srgb(rgb) * 255.0 + 0.5).astype(np.uint8)).save(job.stage / "shell_pigment.png")
+    return ["shell_pigment.exr", "shell_pigment.png"]
+
+
 SHELL_HEIGHT = Generator("shell-height", "shell height map (m) of growth bands in the shell's (u, v) square",
                          ShellHeightParams, write_height, __doc__, previews=True)
 SHELL_BUMP = Generator("shell-bump", "shell bump map (m) of fine radial ribs or concentric ridges",
                        ShellBumpParams, write_bump, __doc__, previews=True)
+SHELL_PIGMENT = Generator("shell-pigment", "shell pigment map (linear RGB) of growth and spiral colour bands",
+                          ShellPigmentParams, write_pigment, __doc__, previews=True)

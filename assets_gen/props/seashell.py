@@ -67,9 +67,11 @@ PRESETS: dict[str, Gastropod] = {
 SCALLOP = "scallop"
 
 
-def gastropod_surface(g: Gastropod, n_theta: int, n_s: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def gastropod_surface(g: Gastropod, n_theta: int, n_s: int, cords: int = 0,
+                      cord_height: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Points (n_theta, n_s, 3) of the shell surface in the model's z-up frame, the aperture centres
-    (n_theta, 3), and θ (n_theta,)."""
+    (n_theta, 3), and θ (n_theta,). ``cords`` spiral ribs (lines of constant s, as on whelks and
+    conchs) raise r by up to ``cord_height`` of itself, with narrow crests and wide troughs."""
     alpha, beta, phi, omega, mu = np.radians([g.alpha, g.beta, g.phi, g.omega, g.mu])
     theta = np.linspace(0.0, 2.0 * np.pi * g.turns, n_theta)[:, None]
     s = np.linspace(-np.pi, np.pi, n_s, endpoint=False)[None, :]
@@ -79,6 +81,8 @@ def gastropod_surface(g: Gastropod, n_theta: int, n_s: int) -> tuple[np.ndarray,
         nth = g.N * theta / (2.0 * np.pi)
         G = (2.0 * np.pi / g.N) * (nth - np.round(nth))
         r = r + g.L * np.exp(-(2.0 * (s - g.P) / g.W1) ** 2 - (2.0 * G / g.W2) ** 2)
+    if cords > 0:
+        r = r * (1.0 + cord_height * (0.5 + 0.5 * np.cos(cords * s)) ** 3)
     cx = g.D * g.A * np.sin(beta) * np.cos(theta)
     cy = -g.A * np.sin(beta) * np.sin(theta)
     cz = -g.A * np.cos(beta) * np.ones_like(theta)
@@ -90,11 +94,15 @@ def gastropod_surface(g: Gastropod, n_theta: int, n_s: int) -> tuple[np.ndarray,
     return pts, centres * growth, theta[:, 0]
 
 
-def gastropod_mesh(g: Gastropod, wall: float, per_turn: int, around: int) -> Mesh:
-    """The solid shell in the model frame. ``wall`` is the wall's share of the aperture radius; over
-    the first half whorl it closes towards the centre so the apex reads as sealed."""
+def gastropod_mesh(g: Gastropod, wall: float, per_turn: int, around: int, cords: int = 0,
+                   cord_height: float = 0.0) -> tuple[Mesh, int]:
+    """The solid shell in the model frame, and how many of its faces (the first) are the outer
+    surface; the inner surface's as many follow, then the rims. ``wall`` is the wall's share of the
+    aperture radius; over the first half whorl it closes towards the centre so the apex reads as
+    sealed. Cords are on the outside only: the inner surface follows the smooth whorl."""
     n_theta = max(8, int(round(per_turn * g.turns)) + 1)
-    pts, centres, theta = gastropod_surface(g, n_theta, around)
+    pts, centres, theta = gastropod_surface(g, n_theta, around, cords, cord_height)
+    smooth = gastropod_surface(g, n_theta, around)[0] if cords > 0 else pts
     outer = grid(pts, wrap_v=True)
     if np.einsum("ij,ij->", outer.normals,
                  seam_grid(pts - centres[:, None], wrap_v=True).reshape(-1, 3)) < 0:
@@ -102,13 +110,14 @@ def gastropod_mesh(g: Gastropod, wall: float, per_turn: int, around: int) -> Mes
     seal = np.clip(theta / np.pi, 0.0, 1.0)
     keep = (1.0 - wall) * seal + 0.3 * (1.0 - seal)      # inner/outer radius about the centre
     c = centres[:, None]
-    inner = seam_grid(c + keep[:, None, None] * (pts - c), wrap_v=True).reshape(-1, 3)
-    return closed_solid(outer, inner, grid_boundary(n_theta, around + 1, wrap_v=True))
+    inner = seam_grid(c + keep[:, None, None] * (smooth - c), wrap_v=True).reshape(-1, 3)
+    return closed_solid(outer, inner, grid_boundary(n_theta, around + 1, wrap_v=True)), len(outer.faces)
 
 
-def scallop_mesh(ribs: int, wall: float, n_r: int, n_fan: int) -> Mesh:
+def scallop_mesh(ribs: int, wall: float, n_r: int, n_fan: int) -> tuple[Mesh, int]:
     """A scallop valve of unit length (umbo to margin) in a z-up frame: a domed fan with ``ribs``
-    radial ribs and two flat ears on the hinge line, built in polar coordinates around the umbo."""
+    radial ribs and two flat ears on the hinge line, built in polar coordinates around the umbo;
+    and the count of its outer (convex, upper) surface's faces, which come first."""
     fan = np.radians(60.0)
     rho = np.linspace(0.04, 1.0, n_r)[:, None]
     psi = np.linspace(-np.pi / 2, np.pi / 2, n_fan)[None, :]
@@ -123,28 +132,54 @@ def scallop_mesh(ribs: int, wall: float, n_r: int, n_fan: int) -> Mesh:
     rib = 0.025 * rho * in_fan * (0.5 + 0.5 * np.cos(ribs * np.pi * psi / fan)) ** 1.5
     pts = np.stack(np.broadcast_arrays(x, y, dome + rib), axis=-1)
     # the wall thins towards the umbo, where the valve tapers to its beak
-    return thicken(pts, wall * np.clip(rho / 0.3, 0.03, 1.0) * np.ones_like(psi), outward=np.array([0.0, 0.0, 1.0]),
-                   height_field=True)
+    return (thicken(pts, wall * np.clip(rho / 0.3, 0.03, 1.0) * np.ones_like(psi), outward=np.array([0.0, 0.0, 1.0]),
+                    height_field=True), 2 * (n_r - 1) * (n_fan - 1))
+
+
+def solid_parts(solid: Mesh, n_outer: int) -> tuple[Mesh, Mesh]:
+    """(exterior, interior) of a solid laid out by :func:`closed_solid` (outer faces, as many inner
+    faces, then rims): the outer surface with the rims, and the inner surface, each with only its
+    own vertices. Together they are the watertight solid; apart, each takes its own material."""
+    inner = np.zeros(len(solid.faces), dtype=bool)
+    inner[n_outer:2 * n_outer] = True
+
+    def part(keep: np.ndarray) -> Mesh:
+        used, faces = np.unique(solid.faces[keep], return_inverse=True)
+        return Mesh(solid.vertices[used], faces.reshape(-1, 3), solid.normals[used], solid.uvs[used])
+    return part(~inner), part(inner)
+
+
+def aperture(interior: Mesh) -> dict[str, list[float]]:
+    """Centre of the lip (the inner surface's u = 1 ring) and the unit normal of the ring's best-fit
+    plane pointing out of the shell: where to look into the aperture from."""
+    ring = interior.vertices[interior.uvs[:, 0] == 1.0]
+    centre = ring.mean(0)
+    normal = np.linalg.svd(ring - centre)[2][-1]
+    if np.dot(normal, centre - interior.vertices.mean(0)) < 0:
+        normal = -normal
+    return {"aperture_centre_m": centre.round(5).tolist(), "aperture_normal": normal.round(4).tolist()}
 
 
 def shell_mesh(preset: str, length: float, wall: float, per_turn: int, around: int, ribs: int,
-               rng: np.random.Generator) -> Mesh:
-    """The shell in metres, y up, resting on y = 0, its largest extent ``length``. The seed varies
-    the preset slightly (growth angle, aperture, nodules) so no two shells are clones."""
+               rng: np.random.Generator, cords: int = 0, cord_height: float = 0.0) -> tuple[Mesh, Mesh]:
+    """(exterior, interior) of the shell in metres, y up, resting on y = 0, its largest extent
+    ``length``. The seed varies the preset slightly (growth angle, aperture, nodules) so no two
+    shells are clones."""
     if preset == SCALLOP:
-        m = scallop_mesh(ribs + int(rng.integers(-2, 3)), wall * 0.15,
-                         n_r=max(8, per_turn // 2), n_fan=max(2 * around, 12 * ribs))
+        m, n_outer = scallop_mesh(ribs + int(rng.integers(-2, 3)), wall * 0.15,
+                                  n_r=max(8, per_turn // 2), n_fan=max(2 * around, 12 * ribs))
     else:
         j = rng.normal(1.0, 0.02, size=4)
         base = PRESETS[preset]
         g = replace(base, alpha=base.alpha + 0.15 * rng.standard_normal(), a=base.a * j[0], b=base.b * j[1],
                     turns=base.turns * j[2], L=base.L * j[3])
-        m = gastropod_mesh(g, wall, per_turn, around)
+        m, n_outer = gastropod_mesh(g, wall, per_turn, around, cords, cord_height)
     # model frame z-up -> scene y-up: (x, y, z) -> (x, z, -y), a proper rotation
     m = m.transformed(np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]]))
     lo, hi = m.vertices.min(0), m.vertices.max(0)
     scale = length / float((hi - lo).max())
-    return m.transformed(np.eye(3), -scale * np.array([(lo[0] + hi[0]) / 2, lo[1], (lo[2] + hi[2]) / 2]), scale)
+    m = m.transformed(np.eye(3), -scale * np.array([(lo[0] + hi[0]) / 2, lo[1], (lo[2] + hi[2]) / 2]), scale)
+    return solid_parts(m, n_outer)
 
 
 @dataclass(frozen=True)
@@ -155,6 +190,9 @@ class SeashellParams(Params):
     per_turn: int = param(48, "mesh rows per whorl")
     around: int = param(40, "mesh columns around the aperture")
     ribs: int = param(18, "scallop: radial ribs")
+    cords: int = param(0, "gastropods: spiral cords (ribs along the growth) around the aperture; "
+                       "give 'around' at least 5 columns per cord")
+    cord_height: float = param(0.05, "gastropods: cord height as a share of the aperture radius")
 
     def validate(self) -> None:
         require(self.preset in (*PRESETS, SCALLOP),
@@ -163,16 +201,23 @@ class SeashellParams(Params):
         require(0.01 <= self.wall <= 0.5, f"wall (share of the aperture radius) must be 0.01..0.5, got {self.wall}")
         require(8 <= self.per_turn <= 512 and 8 <= self.around <= 512, "per-turn and around must be 8..512")
         require(3 <= self.ribs <= 60, f"ribs must be 3..60, got {self.ribs}")
+        require(0 <= self.cords <= 64 and 0 <= self.cord_height <= 0.3, "cords must be 0..64, cord height 0..0.3")
 
 
 def write(job: Job) -> list[str]:
-    """``<preset>.ply``; the manifest also records the preset's model parameters."""
+    """``<preset>.ply`` (the outside and the rims) and ``<preset>_inner.ply`` (the inside: nacre);
+    the manifest also records the preset's model parameters and where the aperture faces."""
     p = job.params
     if p.preset != SCALLOP:
         job.note(model=asdict(PRESETS[p.preset]))
-    mesh = shell_mesh(p.preset, p.length, p.wall, p.per_turn, p.around, p.ribs, np.random.default_rng(job.seed))
-    mesh.write(job.stage / f"{p.preset}.ply")
-    return [f"{p.preset}.ply"]
+    exterior, interior = shell_mesh(p.preset, p.length, p.wall, p.per_turn, p.around, p.ribs,
+                                    np.random.default_rng(job.seed), p.cords, p.cord_height)
+    if p.preset != SCALLOP:
+        job.note(**aperture(interior))
+    names = [f"{p.preset}.ply", f"{p.preset}_inner.ply"]
+    for mesh, name in zip((exterior, interior), names):
+        mesh.write(job.stage / name)
+    return names
 
 
 GENERATOR = Generator("seashell", "a parametric gastropod shell or a ribbed scallop (PLY)",

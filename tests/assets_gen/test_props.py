@@ -86,14 +86,69 @@ def test_manifest_records_derived_facts(tmp_path):
 
 @pytest.mark.parametrize("preset", [*seashell.PRESETS, seashell.SCALLOP])
 def test_seashell_solid(tmp_path, preset):
-    ply, _ = build("seashell", tmp_path, preset=preset, length=0.06, per_turn=20, around=16)
-    mesh = check_mesh(ply, extent=(0.0599, 0.0601))
-    assert mesh.bounds[0][1] == pytest.approx(0.0, abs=1e-6)      # rests on the sand
+    """The outside (with the rims) and the inside are separate files, each a valid open surface;
+    together they are the closed, outward-wound shell."""
+    outside, inside, _ = build("seashell", tmp_path, preset=preset, length=0.06, per_turn=20, around=24, cords=6)
+    parts = [check_mesh(outside, closed=False), check_mesh(inside, closed=False)]
+    assert not parts[0].is_watertight and not parts[1].is_watertight
+    whole = trimesh.util.concatenate(parts)
+    whole.merge_vertices()
+    assert whole.is_watertight and whole.is_winding_consistent and whole.volume > 0
+    assert np.ptp(whole.vertices, axis=0).max() == pytest.approx(0.06, abs=1e-4)
+    assert whole.bounds[0][1] == pytest.approx(0.0, abs=1e-6)     # rests on the sand
+
+
+def test_cords_are_on_the_outside_only():
+    """Spiral cords raise the outer surface (up to cord_height of the radius, in ``cords`` crests
+    around the aperture) and leave the inner one as it was."""
+    g = seashell.PRESETS["conch"]
+    pts, c, _ = seashell.gastropod_surface(g, 40, 48)
+    ribbed, _, _ = seashell.gastropod_surface(g, 40, 48, cords=8, cord_height=0.1)
+    gain = np.linalg.norm(ribbed - c[:, None], axis=-1) / np.linalg.norm(pts - c[:, None], axis=-1) - 1.0
+    assert gain.min() >= -1e-12 and gain.max() == pytest.approx(0.1, rel=0.02)
+    row = gain[20]
+    crests = np.sum((row > np.roll(row, 1)) & (row > np.roll(row, -1)))
+    assert crests == 8
+    plain, n = seashell.gastropod_mesh(g, 0.08, 16, 48)
+    corded, n2 = seashell.gastropod_mesh(g, 0.08, 16, 48, cords=8, cord_height=0.1)
+    (ext_p, int_p), (ext_c, int_c) = seashell.solid_parts(plain, n), seashell.solid_parts(corded, n2)
+    assert np.array_equal(int_p.vertices, int_c.vertices)
+    assert not np.allclose(ext_p.vertices, ext_c.vertices)
+
+
+def test_aperture_looks_into_the_nacre(tmp_path):
+    """The manifest's aperture: a ray from outside along −normal into the lip centre meets the
+    inner (nacre) surface before any outer one."""
+    outside, inside, manifest = build("seashell", tmp_path, 3, preset="conch", per_turn=24, around=24)
+    notes = json.loads(open(manifest).read())["params"]
+    centre, normal = np.array(notes["aperture_centre_m"]), np.array(notes["aperture_normal"])
+    assert np.linalg.norm(normal) == pytest.approx(1.0, abs=1e-3)
+    hits = {}
+    for name, path in (("outside", outside), ("inside", inside)):
+        pos, f, _, _ = load_ply(path)
+        hits[name] = first_hit(centre + 0.05 * normal, -normal, pos[f])
+    assert np.isfinite(hits["inside"]) and hits["inside"] < hits["outside"]
+
+
+def first_hit(origin: np.ndarray, direction: np.ndarray, tri: np.ndarray) -> float:
+    """Distance along the ray to the nearest of the triangles (T, 3, 3), inf if none (Möller–Trumbore)."""
+    e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+    p = np.cross(direction, e2)
+    det = np.einsum("ij,ij->i", e1, p)
+    ok = np.abs(det) > 1e-18
+    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+    s = origin - tri[:, 0]
+    u = np.einsum("ij,ij->i", s, p) * inv
+    q = np.cross(s, e1)
+    v = (q @ direction) * inv
+    t = np.einsum("ij,ij->i", e2, q) * inv
+    hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
+    return float(t[hit].min()) if hit.any() else np.inf
 
 
 def test_seashell_uv_follows_growth():
     """u grows with the spiral: the lip (u = 1) has the largest aperture, the apex (u = 0) the smallest."""
-    m = seashell.gastropod_mesh(seashell.PRESETS["turritella"], 0.08, 16, 16)
+    m, _ = seashell.gastropod_mesh(seashell.PRESETS["turritella"], 0.08, 16, 16)
     outer = slice(0, 17 * (int(16 * 12) + 1))                         # first part: the outer grid
     u, pos = m.uvs[outer, 0], m.vertices[outer]
     lip, apex = np.ptp(pos[u == 1.0], axis=0).max(), np.ptp(pos[u == 0.0], axis=0).max()
@@ -113,6 +168,71 @@ def test_sunglasses(tmp_path):
     l_pos = load_ply(left)[0]
     r_pos = load_ply(right)[0]
     assert l_pos[:, 0].min() > 0 > r_pos[:, 0].max()                # the bridge's gap between lenses
+
+
+def test_lens_thickness_along_rays():
+    """Rays along the optical axis cross the lens's front and back spheres: the lens is a closed
+    solid exactly ``thickness`` thick on axis and sqrt(R² − r²) − sqrt((R − t)² − r²) off axis."""
+    R, t = 0.53 / 6, 0.002
+    lens, _ = sunglasses.lens_mesh(0.0275, 0.0225, 3.0, R, t, rings=10, sides=96)
+    tri = lens.vertices[lens.faces]
+    rng = np.random.default_rng(1)
+    xy = np.concatenate([[[0.0, 0.0]], rng.uniform(-0.6, 0.6, (12, 2)) * [0.0275, 0.0225]])
+    for x, y in xy:
+        down = first_hit(np.array([x, y, 0.01]), np.array([0.0, 0.0, -1.0]), tri)
+        up = first_hit(np.array([x, y, -0.02]), np.array([0.0, 0.0, 1.0]), tri)
+        crossed = 0.03 - down - up
+        r2 = x * x + y * y
+        assert crossed == pytest.approx(np.sqrt(R * R - r2) - np.sqrt((R - t) ** 2 - r2), abs=2e-6)
+    assert 0.03 - sum(first_hit(np.array([0.0, 0.0, z]), np.array([0.0, 0.0, d]), tri)
+                      for z, d in ((0.01, -1.0), (-0.02, 1.0))) == pytest.approx(t, abs=1e-9)
+
+
+def test_lens_volume_is_the_meniscus_integral():
+    """Volume of the closed lens = ∫ over its outline of the axial thickness (a fine numerical
+    quadrature), to the mesh's polygonal discretisation."""
+    R, t, a, b, n = 0.53 / 6, 0.002, 0.0275, 0.0225, 3.0
+    lens, _ = sunglasses.lens_mesh(a, b, n, R, t, rings=24, sides=256)
+    x, y = np.meshgrid(np.linspace(-a, a, 2001), np.linspace(-b, b, 2001))
+    inside = np.abs(x / a) ** n + np.abs(y / b) ** n <= 1.0
+    axial = np.sqrt(R * R - x * x - y * y) - np.sqrt((R - t) ** 2 - x * x - y * y)
+    integral = float((axial * inside).sum() * (2 * a / 2000) * (2 * b / 2000))
+    assert lens.signed_volume() == pytest.approx(integral, rel=4e-3)
+
+
+def test_sunglasses_rest_on_lens_rims_and_temple_tips(tmp_path):
+    """The manifest's rest pose: tilted by rest_tilt_deg about +x and lifted by rest_lift_m, the
+    pair touches y = 0 at both rim bottoms and both temple tips, nothing lies below, and its centre
+    of mass (lenses and frame, uniform density) lies over the support quadrilateral, so it stands."""
+    paths = build("sunglasses", tmp_path, 2)
+    notes = json.loads(open(paths[-1]).read())["params"]
+    rot = trimesh.transformations.rotation_matrix(np.radians(notes["rest_tilt_deg"]), [1, 0, 0])[:3, :3]
+    meshes = [trimesh.Trimesh(*load_ply(p)[:2]) for p in paths[:3]]
+    placed = [m.vertices @ rot.T + [0, notes["rest_lift_m"], 0] for m in meshes]
+    assert min(v[:, 1].min() for v in placed) == pytest.approx(0.0, abs=1e-5)
+    contacts = np.array(notes["contact_points_m"]) @ rot.T + [0, notes["rest_lift_m"], 0]
+    assert np.allclose(contacts[:, 1], 0.0, atol=1e-5)
+    assert contacts[0, 2] > -0.02 and contacts[2, 2] < -0.12          # front rims, then temple tips
+    com = sum(m.volume * m.center_mass for m in meshes) / sum(m.volume for m in meshes)
+    com = rot @ com
+    quad = contacts[[0, 2, 3, 1]][:, [0, 2]]
+    edges = np.roll(quad, -1, 0) - quad
+    side = edges[:, 0] * (com[2] - quad[:, 1]) - edges[:, 1] * (com[0] - quad[:, 0])
+    assert np.all(side > 0) or np.all(side < 0)
+
+
+def test_frame_is_molded_not_wire(tmp_path):
+    """The rim's section is the given width by depth (an acetate frame), wider along the brow."""
+    p = sunglasses.SunglassesParams()
+    _, outline = sunglasses.lens_mesh(p.lens_width / 2, p.lens_height / 2, p.squareness, p.front_radius,
+                                      p.lens_thickness)
+    rim = sunglasses.rim_mesh(p, outline)
+    assert np.ptp(rim.vertices[:, 2]) >= p.rim_depth
+    bottom = rim.vertices[np.abs(rim.vertices[:, 0]) < 0.003]
+    low, high = bottom[bottom[:, 1] < 0], bottom[bottom[:, 1] > 0]
+    # the rim extends beyond the lens outline by width − groove below, + brow above
+    assert -low[:, 1].min() - p.lens_height / 2 == pytest.approx(p.rim_width - p.groove, abs=2e-4)
+    assert high[:, 1].max() - p.lens_height / 2 == pytest.approx(p.rim_width + p.brow - p.groove, abs=2e-4)
 
 
 def test_lens_on_base_curve_sphere():
