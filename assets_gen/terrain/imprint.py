@@ -26,7 +26,7 @@ class ImprintParams(Params):
     mesh: str = param("assets/conch/conch.ply", "prop mesh (PLY, or a folder of PLYs)", path=True)
     placement: str = param("assets/conch_placement/placement.npz", "prop pose written by `placement`", path=True)
     clearance: float = param(2e-4, "gap left between the dent and the prop, m")
-    rim_width: float = param(0.006, "distance from the footprint to the rim's crest, m")
+    rim_width: float = param(0.015, "distance from the footprint to the rim's crest, m")
     raster: float = param(2.5e-4, "grid step of the prop's lower-surface raster, m")
 
     def validate(self) -> None:

@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -102,10 +103,8 @@ def dune_height(field: Heightfield, x: np.ndarray, z: np.ndarray) -> np.ndarray:
 @dataclass(frozen=True)
 class Layout:
     """Where the near field lies and how finely: the rectangle [a0, a1] x [b0, b1] in (along, across)
-    coordinates, where ``axis`` (0 = x, 2 = z) is the along axis, ``sign`` the view direction along
-    it, and the spacing rules of the camera."""
+    coordinates, where ``axis`` (0 = x, 2 = z) is the along axis, and the camera's spacing rules."""
     axis: int
-    sign: float
     cam_a: float
     cam_b: float
     height: float          # camera height above the sand, m
@@ -156,8 +155,7 @@ def layout(field: Heightfield, cam: PinholeCamera, p: NearFieldParams) -> Layout
     sx, sy = cam.screen_half_extent
     down = math.atan2(-fwd[1], horiz) + math.atan(sy)            # steepest ray below the horizon
     near = h / math.tan(down) if down < math.pi / 2 - 1e-6 else 0.0
-    half_tan = 1.1 * sx / max(math.cos(math.atan2(-fwd[1], horiz)), 0.5) * abs(fwd[axis]) / horiz \
-        + abs(fwd[other]) / horiz
+    half_tan = 1.1 * sx + abs(fwd[other]) / horiz     # the view's half-width, 10 % margin, and its drift
     far = p.max_distance + p.taper
     grid_a, grid_b = (field.x, field.z) if axis == 0 else (field.z, field.x)
     cam_a, cam_b = float(pos[axis]), float(pos[other])
@@ -167,7 +165,7 @@ def layout(field: Heightfield, cam: PinholeCamera, p: NearFieldParams) -> Layout
     b_lines = _snap(grid_b, cam_b - half, cam_b + half)
     require(len(a_lines) >= 2 and len(b_lines) >= 2, "the near field lies outside the dune field")
     cell = max(field.dx, field.dz)
-    return Layout(axis, sign, cam_a, cam_b, h, near, half_tan, p.pixels_per_edge * cam.pixel_pitch, p.grading,
+    return Layout(axis, cam_a, cam_b, h, near, half_tan, p.pixels_per_edge * cam.pixel_pitch, p.grading,
                   cell, a_lines, b_lines, p.taper)
 
 
@@ -178,7 +176,7 @@ def _snap(lines: np.ndarray, lo: float, hi: float) -> np.ndarray:
     return lines[i0:i1 + 1]
 
 
-def graded_points(lines: np.ndarray, spacing, samples: int = 32) -> np.ndarray:
+def graded_points(lines: np.ndarray, spacing: Callable[[np.ndarray], np.ndarray], samples: int = 32) -> np.ndarray:
     """Points from lines[0] to lines[-1], including every line, spaced by ``spacing(t)`` (m):
     in each interval the point count is the integral of 1 / spacing, placed at equal steps of it."""
     out = [lines[:1]]
@@ -202,7 +200,7 @@ def zipper(lo: np.ndarray, hi: np.ndarray, base_lo: int, base_hi: int) -> np.nda
     i = np.concatenate([[0], np.cumsum(which == 0)])
     j = np.concatenate([[0], np.cumsum(which == 1)])
     step_lo = which == 0
-    a = np.where(step_lo, base_lo + i[:-1], base_lo + i[:-1])
+    a = base_lo + i[:-1]
     b = np.where(step_lo, base_lo + i[1:], base_hi + j[1:])
     c = base_hi + j[:-1]
     return np.stack([a, b, c], axis=1)
