@@ -6,7 +6,7 @@ from assets_gen import sky, sky_lights
 from assets_gen.core import Generator, GeneratorError
 from assets_gen.maps import lens_thickness, shell
 from assets_gen.props import palm, seashell, sunglasses, umbrella
-from assets_gen.terrain import dunes, grains, ripples
+from assets_gen.terrain import dunes, grains, imprint, near_field, placement, ripples
 
 GENERATORS: tuple[Generator, ...] = (
     seashell.GENERATOR,
@@ -18,6 +18,9 @@ GENERATORS: tuple[Generator, ...] = (
     dunes.GENERATOR,
     ripples.GENERATOR,
     grains.GENERATOR,
+    near_field.GENERATOR,
+    placement.GENERATOR,
+    imprint.GENERATOR,
     lens_thickness.GENERATOR,
     shell.SHELL_HEIGHT,
     shell.SHELL_BUMP,

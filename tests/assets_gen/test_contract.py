@@ -18,7 +18,7 @@ NAMES = [g.name for g in GENERATORS]
 
 
 def test_registry_names_are_unique_and_in_the_cli():
-    assert len(set(NAMES)) == len(NAMES) == 13
+    assert len(set(NAMES)) == len(NAMES) == 16
     sub = build_parser().parse_args(["recipe", "x.recipe.json"])
     assert sub.command == "recipe"
 
