@@ -29,6 +29,8 @@ from renderer.scene.transform import MAX_INSTANCES as MAX_GRAINS
 @dataclass(frozen=True)
 class GrainParams(Params):
     surface: str = param("assets/dunes/dunes.ply", "surface mesh to scatter on (PLY, +y up, m)", path=True)
+    ripples: str = param("", "ripple displacement map (assets-gen ripples) that sorts the grains; none: unsorted",
+                         path=True)
     count: int = param(100_000, "number of grains")
     median_diameter_mm: float = param(0.35, "median grain diameter, mm")
     sigma_ln: float = param(0.25, "standard deviation of ln(diameter) (sorting)")
@@ -43,8 +45,6 @@ class GrainParams(Params):
     feldspar_fraction: float = param(0.12, "number fraction of feldspar grains")
     heavy_fraction: float = param(0.03, "number fraction of heavy-mineral grains (magnetite, ilmenite)")
     shell_fraction: float = param(0.05, "number fraction of shell fragments")
-    ripples: str = param("", "ripple displacement map (assets-gen ripples) that sorts the grains; none: unsorted",
-                         path=True)
     heavy_trough_bias: float = param(0.9, "how strongly heavy minerals keep to ripple troughs, 0..1")
     size_crest_bias: float = param(0.6, "how strongly coarse grains keep to ripple crests, 0..1")
     scene: str = param("", "pbrt-v4 scene file to take the camera from (overrides the camera options)",
@@ -305,9 +305,10 @@ def generate(p: GrainParams, seed: int) -> tuple[Grains, list[tuple[np.ndarray, 
         vertices, faces = np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
     require(len(faces) > 0, f"surface mesh {p.surface!r} has no triangles")
     cam = scene_camera(p, vertices, faces)
+    grains = scatter_grains(vertices, faces, cam, p, rng)     # first: instances do not shift with the shapes
     shapes = [grain_shape(rng, p.subdivisions, p.shape_jitter * c.jitter, p.elongation * c.elongation, c.flatness)
               for c in CLASSES]
-    return scatter_grains(vertices, faces, cam, p, rng), shapes, cam
+    return grains, shapes, cam
 
 
 def write(job: Job) -> list[str]:
