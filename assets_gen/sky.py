@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from assets_gen.core import Generator, Job, Params, param, require
+from assets_gen.solar_position import SunPosition, parse_local_time, sun_position
 
 SUN_ANGULAR_RADIUS_DEG = 0.27
 SOLAR_ILLUMINANCE_LUX = 128_000.0   # extraterrestrial solar illuminance constant (IES, ~127.5-128 klx)
@@ -141,8 +142,14 @@ def diffuse_horizontal_klx(rgb: np.ndarray, dirs: np.ndarray, solid_angle: np.nd
 
 @dataclass(frozen=True)
 class SkyParams(Params):
-    elevation_deg: float = param(45.0, "sun elevation above the horizon, degrees")
-    azimuth_deg: float = param(0.0, "sun azimuth, light frame +x towards +y, degrees")
+    elevation_deg: float = param(45.0, "sun elevation above the horizon, degrees (unless --date is given)")
+    azimuth_deg: float = param(0.0, "sun azimuth, light frame +x towards +y, degrees (unless --date is given)")
+    date: str = param("", "YYYY-MM-DD: take the sun's position from date, time and place (Meeus) instead")
+    local_time: str = param("12:00", "local clock time HH:MM[:SS] with --date")
+    utc_offset_h: float = param(0.0, "hours the local clock is ahead of UTC, with --date")
+    latitude_deg: float = param(0.0, "latitude (north positive), degrees, with --date")
+    longitude_deg: float = param(0.0, "longitude (east positive), degrees, with --date")
+    north_azimuth_deg: float = param(90.0, "light-frame azimuth of geographic north (+x towards +y), degrees")
     turbidity: float = param(3.0, "atmospheric turbidity, 2..10")
     resolution: int = param(512, "map height in pixels")
     layout: str = param("both", "which maps to write", choices=("both", "latlong", "equal-area"))
@@ -158,6 +165,23 @@ class SkyParams(Params):
         require(self.layout in ("both", "latlong", "equal-area"),
                 f"layout must be both, latlong or equal-area, got {self.layout!r}")
         require(0.0 <= self.ground_albedo <= 1.0, f"ground albedo must be 0..1, got {self.ground_albedo}")
+        if self.date:
+            elevation = self.sun().elevation_deg
+            require(elevation >= 0.5, f"the sun is {elevation:.3g} deg high at {self.date} {self.local_time} "
+                                      "there (the sky model needs at least 0.5 deg)")
+
+    def sun(self) -> SunPosition:
+        """The sun's elevation and compass azimuth for --date, --local-time and the place."""
+        when = parse_local_time(self.date, self.local_time, self.utc_offset_h)
+        return sun_position(when, self.latitude_deg, self.longitude_deg)
+
+    def sun_angles(self) -> tuple[float, float]:
+        """(elevation, light-frame azimuth) in degrees: given, or from the date. The light frame
+        turns counter-clockwise seen from above, the compass clockwise."""
+        if not self.date:
+            return self.elevation_deg, self.azimuth_deg
+        pos = self.sun()
+        return pos.elevation_deg, (self.north_azimuth_deg - pos.azimuth_deg) % 360.0
 
 
 def write(job: Job) -> list[str]:
@@ -166,8 +190,7 @@ def write(job: Job) -> list[str]:
     from renderer.io.images import write_exr
 
     p = job.params
-    elevation_deg, azimuth_deg, turbidity, resolution, layout = (
-        p.elevation_deg, p.azimuth_deg, p.turbidity, p.resolution, p.layout)
+    (elevation_deg, azimuth_deg), turbidity, resolution, layout = p.sun_angles(), p.turbidity, p.resolution, p.layout
     sun = sun_direction(elevation_deg, azimuth_deg)
     light = sun_light(sun, turbidity)
     ea_dirs = equal_area_directions(resolution)
@@ -183,7 +206,10 @@ def write(job: Job) -> list[str]:
         ll_dirs = latlong_directions(resolution)
         maps["sky_latlong.exr"] = np.where((ll_dirs[..., 2] > 0)[..., None],
                                            sky_radiance(ll_dirs, sun, turbidity), ground)
-    info = {"sun": light, "sky": {"diffuse_horizontal_illuminance_lux": e_dh * 1000.0,
+    info = {"sun": light, "solar_position": {"elevation_deg": elevation_deg, "azimuth_deg": azimuth_deg,
+                                             "compass_azimuth_deg": p.sun().azimuth_deg if p.date else None,
+                                             "from": "Meeus (1998) chs. 12, 13, 25" if p.date else "given"},
+            "sky": {"diffuse_horizontal_illuminance_lux": e_dh * 1000.0,
                                   "global_horizontal_illuminance_lux": e_dh * 1000.0
                                   + light["normal_illuminance_lux"] * sun[2],
                                   "ground_rgb_radiance": ground, "rgb_irradiance_horizontal": horizontal},

@@ -51,7 +51,8 @@ def write(job: Job) -> list[str]:
         meta = json.loads((Path(p.sky) / "sky.json").read_text())["params"]
         sun = meta["sun"]
         d = [float(c) for c in sun["direction_world_y_up"]]
-        when = [float(meta[k]) for k in ("elevation_deg", "azimuth_deg", "turbidity")]
+        placed = meta.get("solar_position", meta)           # the sun's angles, given or from a date
+        when = [float(placed["elevation_deg"]), float(placed["azimuth_deg"]), float(meta["turbidity"])]
         radius = _fmt(float(sun.get("angular_radius_deg", 0.27)))
         strength = ([float(v) * p.scale for v in sun["rgb_irradiance"]] if p.sun == "rgb"
                     else float(sun["normal_illuminance_lux"]) / 1000.0)   # klx

@@ -4,6 +4,12 @@ Each dune is asymmetric like a real one: a long stoss side climbing at 10–15°
 short slip face falling at the angle of repose downwind of the crest. Crest lines wander with
 noise and dune heights vary, which steepens some slopes; avalanching (talus relaxation, run to
 convergence) then brings every triangle back to at most the critical slope, conserving sand.
+
+Barchanoid ridges (``horn_spacing`` > 0): each crest line is a chain of crescents, concave
+downwind, whose horns reach ``horn_length`` downwind of the crescent centres and stand lower by
+``horn_drop``; the crescents' spacing wanders with seeded low-frequency noise, so no two are alike
+(McKee 1979's barchanoid ridge, between barchans and straight transverse dunes). The brink is the
+crest itself: the slip face starts at the crest and only ``smoothing_steps`` round it.
 """
 from __future__ import annotations
 
@@ -31,6 +37,10 @@ class DuneParams(Params):
     max_slope_deg: float = param(34.0, "critical slope no triangle may exceed after avalanching, degrees")
     crest_wander: float = param(2.5, "how far crest lines wander along the wind, m")
     wander_size: float = param(12.0, "feature size of the crest wander and height variation, m")
+    crest_x: float = param(0.0, "x of one crest line before wander and horns (the others every wavelength), m")
+    horn_spacing: float = param(0.0, "mean crest-wise spacing of barchanoid crescents (0: straight ridges), m")
+    horn_length: float = param(0.0, "how far the horns reach downwind of the crescent centres, m")
+    horn_drop: float = param(0.25, "relative height lost from a crescent centre to its horns")
     smoothing_steps: int = param(3, "Laplacian smoothing steps that round crests and brinks")
 
     def validate(self) -> None:
@@ -47,6 +57,11 @@ class DuneParams(Params):
         require(self.stoss_angle_deg < self.repose_angle_deg <= self.max_slope_deg,
                 "need stoss angle < angle of repose <= max slope")
         require(self.crest_wander >= 0 and self.wander_size > 0, "crest wander >= 0 and wander size > 0 (m)")
+        require(self.horn_spacing >= 0 and self.horn_length >= 0, "horn spacing and length must be >= 0 (m)")
+        require(self.horn_length == 0 or self.horn_spacing > 0, "horns need a horn spacing > 0 (m)")
+        require(self.crest_wander + self.horn_length < 0.5 * self.dune_wavelength,
+                "crest wander + horn length must stay under half a wavelength (crests would cross)")
+        require(0 <= self.horn_drop < 1, "horn drop must be in [0, 1)")
         require(0 <= self.smoothing_steps <= 100, "smoothing steps must be 0..100 (crests are gone long before)")
         tallest = self.dune_wavelength * math.tan(math.radians(self.stoss_angle_deg))
         require(self.dune_height <= tallest,
@@ -57,20 +72,48 @@ class DuneParams(Params):
 def dune_profile(x: np.ndarray, z: np.ndarray, p: DuneParams, rng: np.random.Generator) -> np.ndarray:
     """Unrelaxed dune heights: from each crest the surface falls at the repose slope downwind and
     at the stoss slope upwind; the higher of the two (and of the flat interdune) wins. Crest lines
-    are level sets of a wind coordinate bent by noise; distances to them are Euclidean and a slip
-    face falls from the height of its nearest crest point, so wandering crests of varying height
-    keep their slip faces at the angle of repose (the gentle stoss takes the local height)."""
+    are level sets of a wind coordinate bent by noise and by the crescents; distances to them are
+    Euclidean and a slip face falls from the height of its nearest crest point, so wandering crests
+    of varying height keep their slip faces at the angle of repose (the gentle stoss takes the
+    local height)."""
     lo, hi = (float(x.min()), float(z.min())), (float(x.max()), float(z.max()))
     wander = smooth_noise(rng, lo, hi, p.wander_size)
     height = smooth_noise(rng, lo, hi, p.wander_size * 1.5)
     xx, zz = np.meshgrid(x, z)
+    horns = crescent_offset(z, p, rng)[:, None]                       # 0 at centres .. 1 at horns
     crest_height = p.dune_height * np.clip(1.0 + p.height_variation * height(xx, zz), 0.0, None)
-    s = (xx + p.crest_wander * wander(xx, zz)) / p.dune_wavelength
+    crest_height = crest_height * (1.0 - p.horn_drop * horns)
+    shift = p.crest_wander * np.tanh(wander(xx, zz)) + p.horn_length * horns   # crest moves downwind
+    s = (xx - p.crest_x - shift) / p.dune_wavelength
     spacing = (float(z[1] - z[0]) if len(z) > 1 else 1.0, float(x[1] - x[0]) if len(x) > 1 else 1.0)
     (behind, crest_of_slip), (ahead, _) = crest_distances(s, spacing).values()
-    slip = crest_height[crest_of_slip] - behind * math.tan(math.radians(p.repose_angle_deg))
+    slip = crest_height[crest_of_slip] - behind * slip_gradient(crest_height, s, spacing, p)[crest_of_slip]
     stoss = crest_height - ahead * math.tan(math.radians(p.stoss_angle_deg))
     return np.maximum(np.maximum(slip, stoss), 0.0)
+
+
+def slip_gradient(crest_height: np.ndarray, s: np.ndarray, spacing: tuple[float, float],
+                  p: DuneParams) -> np.ndarray:
+    """How steeply a slip face must fall away from each crest point for the surface to slope at the
+    angle of repose: a crest whose height changes along it by g per metre gives the face below it
+    that gradient too, so the fall is sqrt(tan^2 repose - g^2) (at least tan(repose - 8 deg))."""
+    hz, hx = np.gradient(crest_height, *spacing)
+    sz, sx = np.gradient(s, *spacing)
+    along = np.abs(hx * sz - hz * sx) / np.maximum(np.hypot(sx, sz), 1e-12)   # dH/d(crest arc length)
+    tan_repose = math.tan(math.radians(p.repose_angle_deg))
+    least = math.tan(math.radians(p.repose_angle_deg - 8.0))
+    return np.sqrt(np.maximum(tan_repose ** 2 - along ** 2, least ** 2))
+
+
+def crescent_offset(z: np.ndarray, p: DuneParams, rng: np.random.Generator) -> np.ndarray:
+    """Across-wind profile of a barchanoid crest, 0 at each crescent's centre and 1 at the cusp
+    where two crescents' horns meet: 1 - |sin(pi z' / spacing)|, smooth at the centres and cusped
+    at the horns, with z' = z warped by noise so the crescents' widths vary (+-30 %)."""
+    if p.horn_spacing == 0:
+        return np.zeros_like(z)
+    warp = smooth_noise(rng, (float(z.min()), 0.0), (float(z.max()), 1.0), 2.0 * p.horn_spacing)
+    zw = z + 0.3 * p.horn_spacing * np.tanh(warp(z, np.zeros_like(z)))
+    return 1.0 - np.abs(np.sin(np.pi * zw / p.horn_spacing))
 
 
 def crest_distances(s: np.ndarray, spacing: tuple[float, float]) -> dict[str, tuple[np.ndarray, tuple]]:

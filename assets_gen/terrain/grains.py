@@ -1,7 +1,10 @@
-"""Sand grains where the camera can resolve them: two jittered icosphere shapes of unit diameter
-and up to millions of instances (position, orientation, scale) on the dune surface.
+"""Sand grains where the camera can resolve them: one jittered icosphere shape of unit diameter per
+mineral class (quartz, feldspar, heavy minerals, shell fragments: sand_minerals) and up to
+millions of instances (position, orientation, scale) on the surface mesh it is given.
 
-Diameters are lognormal around 0.35 mm (medium sand). The grains sit partly sunk into the surface
+Diameters are lognormal around 0.35 mm (medium sand); classes are drawn with their number
+fractions, and with a ripple map the placement sorts them as wind does (heavy minerals in the
+troughs, coarse grains on the crests). Shell fragments are flat and lie flat. The grains sit partly sunk into the surface
 and never overlap. Placement follows a weight map painted by the camera: a grain may only go
 inside the view frustum, only where a grain of the median diameter covers at least a chosen
 fraction of a pixel, and only where the camera sees the surface (the renderer's ray caster tests
@@ -19,12 +22,15 @@ import numpy as np
 from assets_gen.core import Generator, GeneratorError, Job, Params, param, reading, require
 from assets_gen.core.camera import PinholeCamera
 from assets_gen.core.output import write_ply
+from assets_gen.terrain.sand_minerals import CLASSES, RipplePhase, acceptance, draw_classes
 from renderer.scene.transform import MAX_INSTANCES as MAX_GRAINS
 
 
 @dataclass(frozen=True)
 class GrainParams(Params):
     surface: str = param("assets/dunes/dunes.ply", "surface mesh to scatter on (PLY, +y up, m)", path=True)
+    ripples: str = param("", "ripple displacement map (assets-gen ripples) that sorts the grains; none: unsorted",
+                         path=True)
     count: int = param(100_000, "number of grains")
     median_diameter_mm: float = param(0.35, "median grain diameter, mm")
     sigma_ln: float = param(0.25, "standard deviation of ln(diameter) (sorting)")
@@ -35,6 +41,12 @@ class GrainParams(Params):
     elongation: float = param(0.25, "largest relative shortening of a grain shape's axes")
     subdivisions: int = param(2, "icosphere subdivisions of the grain shapes")
     max_rounds: int = param(200, "placement rounds before giving up on grains that do not fit")
+    quartz_fraction: float = param(0.80, "number fraction of quartz grains")
+    feldspar_fraction: float = param(0.12, "number fraction of feldspar grains")
+    heavy_fraction: float = param(0.03, "number fraction of heavy-mineral grains (magnetite, ilmenite)")
+    shell_fraction: float = param(0.05, "number fraction of shell fragments")
+    heavy_trough_bias: float = param(0.9, "how strongly heavy minerals keep to ripple troughs, 0..1")
+    size_crest_bias: float = param(0.6, "how strongly coarse grains keep to ripple crests, 0..1")
     scene: str = param("", "pbrt-v4 scene file to take the camera from (overrides the camera options)",
                        path=True)
     camera_position: tuple[float, float, float] = param((0.0, 0.3, -0.6),
@@ -56,18 +68,26 @@ class GrainParams(Params):
         require(0 <= self.sink_spread <= self.sink_fraction and self.sink_fraction + self.sink_spread < 0.5,
                 "need 0 <= sink spread <= sink fraction and sink fraction + spread < 0.5 "
                 "(grain centres stay above the surface)")
-        require(0 <= self.shape_jitter < 0.5 and 0 <= self.elongation < 0.8,
-                "shape jitter must be in [0, 0.5) and elongation in [0, 0.8)")
+        require(0 <= self.shape_jitter < 0.33 and 0 <= self.elongation < 0.66,
+                "shape jitter must be in [0, 0.33) and elongation in [0, 0.66) (feldspar takes 1.5x and 1.2x)")
         require(0 <= self.subdivisions <= 5, "subdivisions must be 0..5")
         require(self.max_rounds >= 1, "max rounds must be at least 1")
+        require(not self.ripples or Path(self.ripples).is_file(), f"ripple map {self.ripples!r} not found")
+        require(0 <= self.heavy_trough_bias <= 1 and 0 <= self.size_crest_bias <= 1,
+                "heavy trough bias and size crest bias must be in [0, 1]")
+        draw_classes(np.random.default_rng(0), 1, self.fractions())
+
+    def fractions(self) -> tuple[float, float, float, float]:
+        return self.quartz_fraction, self.feldspar_fraction, self.heavy_fraction, self.shell_fraction
         require(0 < self.fov_deg < 180, "fov must be between 0 and 180 degrees")
         require(self.width > 0 and self.height > 0, "film resolution must be positive")
 
 
-def grain_shape(rng: np.random.Generator, subdivisions: int, jitter: float,
-                elongation: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def grain_shape(rng: np.random.Generator, subdivisions: int, jitter: float, elongation: float,
+                flatness: float = 1.0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(vertices, faces, normals, uvs) of a sand grain of unit diameter (its farthest vertex at
-    0.5): an icosphere squashed along random axes and roughened by a few smooth random waves."""
+    0.5): an icosphere squashed along random axes, roughened by a few smooth random waves, and
+    its y axis scaled by ``flatness`` (a flake lying in the xz plane)."""
     import trimesh
 
     sphere = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
@@ -78,7 +98,7 @@ def grain_shape(rng: np.random.Generator, subdivisions: int, jitter: float,
     waves /= np.linalg.norm(waves, axis=1, keepdims=True)
     bumps = np.cos(np.pi * rng.uniform(1.0, 3.0, 6) * (dirs @ waves.T) + rng.uniform(0, 2 * np.pi, 6)).mean(1)
     radius = 1.0 + jitter * bumps / max(np.abs(bumps).max(), 1e-12)
-    v = (((dirs * radius[:, None]) @ axes) * squash) @ axes.T
+    v = (((dirs * radius[:, None]) @ axes) * squash) @ axes.T * np.array([1.0, flatness, 1.0])
     v *= 0.5 / np.linalg.norm(v, axis=1).max()
     mesh = trimesh.Trimesh(v, sphere.faces, process=False)
     uv = np.stack([0.5 + np.arctan2(dirs[:, 2], dirs[:, 0]) / (2 * np.pi),
@@ -134,7 +154,7 @@ class Grains:
     centres: np.ndarray      # (N, 3) m
     diameters: np.ndarray    # (N,) m
     rotations: np.ndarray    # (N, 3, 3)
-    kind: np.ndarray         # (N,) uint8: which grain shape
+    kind: np.ndarray         # (N,) uint8: which mineral class (sand_minerals.CLASSES)
 
     def transforms(self) -> np.ndarray:
         """(N, 4, 4) float32 object-to-world for a unit-diameter grain mesh."""
@@ -147,9 +167,9 @@ class Grains:
 
 def scatter_grains(vertices: np.ndarray, faces: np.ndarray, cam: PinholeCamera, p: GrainParams,
                    rng: np.random.Generator) -> Grains:
-    """Draw every grain's diameter, sinking, orientation and shape, then redraw positions for the
-    grains that do not yet fit (outside the weight map, hidden, or overlapping one already
-    placed) until all are placed."""
+    """Draw every grain's diameter, sinking, orientation and class, then redraw positions for the
+    grains that do not yet fit (outside the weight map, hidden, overlapping one already placed,
+    or refused by the ripple sorting) until all are placed."""
     from scipy.spatial import cKDTree
 
     from renderer.geometry.raycast import cast_rays
@@ -158,8 +178,12 @@ def scatter_grains(vertices: np.ndarray, faces: np.ndarray, cam: PinholeCamera, 
     diameters = 1e-3 * p.median_diameter_mm * np.exp(p.sigma_ln * rng.standard_normal(n))
     sink = p.sink_fraction + p.sink_spread * rng.uniform(-1.0, 1.0, n)
     rotations = random_rotations(rng, n)
-    kind = rng.integers(0, 2, n).astype(np.uint8)
+    kind = draw_classes(rng, n, p.fractions())
+    flat = np.flatnonzero([CLASSES[k].flatness < 1 for k in kind])
+    rotations[flat] = yaw_rotations(rng, len(flat))                   # flakes lie flat
     radii = 0.5 * diameters
+    size_rank = np.log(diameters / (1e-3 * p.median_diameter_mm)) / max(p.sigma_ln, 1e-12)
+    phase = RipplePhase(p.ripples) if p.ripples else None
 
     max_depth = cam.max_depth_for_coverage(1e-3 * p.median_diameter_mm, p.min_pixel_fraction)
     tris = visible_triangles(vertices, faces, cam, max_depth)
@@ -186,6 +210,10 @@ def scatter_grains(vertices: np.ndarray, faces: np.ndarray, cam: PinholeCamera, 
         centre = surface + n_up * (radii[todo] * (1.0 - 2.0 * sink[todo]))[:, None]
         ok = cam.in_frustum(centre) & (cam.to_camera(centre)[:, 2] <= max_depth)
         ok &= np.einsum("ij,ij->i", n_up, eye - surface) > 0
+        if phase is not None:
+            keep = acceptance(phase(centre[:, 0], centre[:, 2]), kind[todo], size_rank[todo],
+                              p.heavy_trough_bias, p.size_crest_bias)
+            ok &= rng.random(len(todo)) < keep
         ok[ok] = _seen(cast_rays, vertices, sub, eye, centre[ok], radii[todo[ok]])
         fresh = todo[ok]
         centres[fresh] = centre[ok]
@@ -196,6 +224,13 @@ def scatter_grains(vertices: np.ndarray, faces: np.ndarray, cam: PinholeCamera, 
         raise GeneratorError(f"only {n - missing} of {n} grains fit on the visible sand after "
                              f"{p.max_rounds} rounds; lower --count or --min-pixel-fraction")
     return Grains(centres, diameters, rotations, kind)
+
+
+def yaw_rotations(rng: np.random.Generator, n: int) -> np.ndarray:
+    """(n, 3, 3) rotations about +y by uniform random angles."""
+    a = rng.uniform(0.0, 2.0 * np.pi, n)
+    c, s_, z, o = np.cos(a), np.sin(a), np.zeros(n), np.ones(n)
+    return np.stack([np.stack([c, z, s_], -1), np.stack([z, o, z], -1), np.stack([-s_, z, c], -1)], axis=1)
 
 
 def _seen(cast_rays: Any, vertices: np.ndarray, faces: np.ndarray, eye: np.ndarray, centres: np.ndarray,
@@ -227,18 +262,18 @@ def _overlapping(kdtree: Any, centres: np.ndarray, radii: np.ndarray, placed: np
 
 def write_grains(stage: Path, grains: Grains, shapes: list[tuple[np.ndarray, ...]], cam: PinholeCamera,
                  preview: bool) -> list[str]:
-    """Shapes as ``grain_a.ply``/``grain_b.ply``; instances all together in ``grains.npz``
-    (transforms, scales = diameters in m, kind) and per shape in ``grains_a.npz``/``grains_b.npz``."""
+    """Shapes as ``grain_<class>.ply``; instances all together in ``grains.npz`` (transforms,
+    scales = diameters in m, kind = class index) and per class in ``grains_<class>.npz``."""
     names = []
     xf = grains.transforms()
     np.savez(stage / "grains.npz", transforms=xf, scales=grains.diameters.astype(np.float32), kind=grains.kind)
     names.append("grains.npz")
-    for k, (letter, shape) in enumerate(zip("ab", shapes)):
-        write_ply(stage / f"grain_{letter}.ply", *shape[:2], normals=shape[2], uvs=shape[3])
+    for k, (cls, shape) in enumerate(zip(CLASSES, shapes)):
+        write_ply(stage / f"grain_{cls.name}.ply", *shape[:2], normals=shape[2], uvs=shape[3])
         mine = grains.kind == k
-        np.savez(stage / f"grains_{letter}.npz", transforms=xf[mine],
+        np.savez(stage / f"grains_{cls.name}.npz", transforms=xf[mine],
                  scales=grains.diameters[mine].astype(np.float32))
-        names += [f"grain_{letter}.ply", f"grains_{letter}.npz"]
+        names += [f"grain_{cls.name}.ply", f"grains_{cls.name}.npz"]
     if preview:
         _write_preview(stage / "grains.png", grains, cam)
         names.append("grains.png")
@@ -270,8 +305,10 @@ def generate(p: GrainParams, seed: int) -> tuple[Grains, list[tuple[np.ndarray, 
         vertices, faces = np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
     require(len(faces) > 0, f"surface mesh {p.surface!r} has no triangles")
     cam = scene_camera(p, vertices, faces)
-    shapes = [grain_shape(rng, p.subdivisions, p.shape_jitter, p.elongation) for _ in range(2)]
-    return scatter_grains(vertices, faces, cam, p, rng), shapes, cam
+    grains = scatter_grains(vertices, faces, cam, p, rng)     # first: instances do not shift with the shapes
+    shapes = [grain_shape(rng, p.subdivisions, p.shape_jitter * c.jitter, p.elongation * c.elongation, c.flatness)
+              for c in CLASSES]
+    return grains, shapes, cam
 
 
 def write(job: Job) -> list[str]:
@@ -279,5 +316,5 @@ def write(job: Job) -> list[str]:
     return write_grains(job.stage, grains, shapes, cam, job.preview)
 
 
-GENERATOR = Generator("grains", "sand grains where the camera resolves them: two shapes and their instances",
+GENERATOR = Generator("grains", "sand grains where the camera resolves them: a mineral mix sorted by the ripples",
                       GrainParams, write, __doc__, previews=True)

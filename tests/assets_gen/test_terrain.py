@@ -124,11 +124,13 @@ def test_grains_in_frustum_visible_apart_and_lognormal(dunes, grains):
     assert (gap >= (d[pairs[:, 0]] + d[pairs[:, 1]]) / 2).all()
 
     assert stats.kstest(d, "lognorm", args=(0.25, 0, 0.35e-3)).pvalue > 0.01
-    assert set(np.unique(kind)) == {0, 1}
-    a, b = np.load(grains / "grains_a.npz"), np.load(grains / "grains_b.npz")
-    assert len(a["transforms"]) + len(b["transforms"]) == 4000
-    for shape in ("grain_a.ply", "grain_b.ply"):
-        m = trimesh.load(grains / shape, process=False)
+    assert set(np.unique(kind)) == {0, 1, 2, 3}
+    per_class = [np.load(grains / f"grains_{c}.npz") for c in ("quartz", "feldspar", "heavy", "shell")]
+    assert sum(len(c["transforms"]) for c in per_class) == 4000
+    for k, c in enumerate(per_class):
+        assert np.array_equal(c["transforms"], xf[kind == k])
+    for c in ("quartz", "feldspar", "heavy", "shell"):
+        m = trimesh.load(grains / f"grain_{c}.ply", process=False)
         assert np.linalg.norm(m.vertices, axis=1).max() == pytest.approx(0.5, rel=1e-5)
         assert m.is_watertight
 
