@@ -9,7 +9,7 @@ import numpy as np
 import warp as wp
 
 from renderer.errors import RenderError
-from renderer.sampling.lowdiscrepancy_tables import (four_way_permutations, primes, sobol_matrices,
+from renderer.sampling.lowdiscrepancy_tables import (four_way_permutations, primes, sobol_byte_tables, sobol_matrices,
                                                      sobol_pixel_inverse)
 from renderer.sampling.sampler_spec import SamplerSpec
 from renderer.sampling.samplers import KINDS, SamplerParams
@@ -68,10 +68,11 @@ def upload_sampler(spec: SamplerSpec, width: int, height: int, device: str) -> D
     _halton(p, width, height)
     n_matrix_dims = SOBOL_DIMENSIONS if spec.name == "sobol" else 2
     keep = [wp.array(sobol_matrices(n_matrix_dims).ravel(), dtype=wp.uint32, device=device),
+            wp.array(sobol_byte_tables(sobol_matrices(2)).ravel(), dtype=wp.uint32, device=device),
             wp.array(sobol_pixel_inverse(res_log2 if spec.name == "sobol" else 0), dtype=wp.uint32, device=device),
             wp.array(four_way_permutations().ravel(), dtype=int, device=device),
             wp.array(primes(HALTON_DIMENSIONS if spec.name == "halton" else 2), dtype=int, device=device)]
-    p.matrices, p.pixel_inverse, p.perms, p.primes = keep
+    p.matrices, p.byte_tables, p.pixel_inverse, p.perms, p.primes = keep
     return DeviceSampler(p, keep)
 
 

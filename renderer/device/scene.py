@@ -68,6 +68,18 @@ def _spectral_table(needed: bool, thin_film: str, device: str) -> tuple[RgbWeigh
     return table, n
 
 
+def flatten_instances(desc: SceneDescription) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The instance sets as one instance list: mesh index, shape index, (K, 4, 4) object-to-world."""
+    inst_mesh, inst_shape, xforms = [], [], []
+    for s in desc.instance_sets:
+        k = len(s.transforms)
+        for shape in s.shapes:
+            inst_mesh.append(np.full(k, desc.shapes[shape].mesh, dtype=np.int32))
+            inst_shape.append(np.full(k, shape, dtype=np.int32))
+            xforms.append(np.asarray(s.transforms, dtype=np.float64).reshape(k, 4, 4))
+    return np.concatenate(inst_mesh), np.concatenate(inst_shape), np.concatenate(xforms)
+
+
 def upload(desc: SceneDescription, device: str, width: int | None = None, height: int | None = None,
            nee: bool = True, thin_film: str = THIN_FILM_MODE) -> DeviceScene:
     width = width or desc.film.width
@@ -77,17 +89,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     table = TextureTable()
     mats, mat_keep, used = build_materials(desc.materials, desc.textures, table, device)
 
-    # flatten instance sets into one instance list
-    inst_mesh, inst_shape, xforms = [], [], []
-    for s in desc.instance_sets:
-        k = len(s.transforms)
-        for shape in s.shapes:
-            inst_mesh.append(np.full(k, desc.shapes[shape].mesh, dtype=np.int32))
-            inst_shape.append(np.full(k, shape, dtype=np.int32))
-            xforms.append(np.asarray(s.transforms, dtype=np.float64).reshape(k, 4, 4))
-    inst_mesh_a = np.concatenate(inst_mesh)
-    inst_shape_a = np.concatenate(inst_shape)
-    xform_a = np.concatenate(xforms)
+    inst_mesh_a, inst_shape_a, xform_a = flatten_instances(desc)
 
     lights, shape_light = build_light_table(desc, inst_shape_a, xform_a)
 

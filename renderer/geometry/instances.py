@@ -59,7 +59,7 @@ def build_geometry(meshes: list[tuple[np.ndarray, np.ndarray, np.ndarray | None,
             uv_count += len(uv)
     to_world = np.ascontiguousarray(inst_to_world, dtype=np.float32).reshape(-1, 4, 4)
     to_object = np.linalg.inv(to_world.astype(np.float64)).astype(np.float32)
-    lo, hi = _instance_bounds(np.array(mesh_lo), np.array(mesh_hi), np.asarray(inst_mesh), to_world)
+    lo, hi = instance_bounds(np.array(mesh_lo), np.array(mesh_hi), np.asarray(inst_mesh), to_world)
 
     def arr(a, dtype, empty_shape):
         a = np.concatenate(a) if a else np.zeros(empty_shape, dtype=np.float32)
@@ -87,7 +87,7 @@ def build_geometry(meshes: list[tuple[np.ndarray, np.ndarray, np.ndarray | None,
     return data
 
 
-def _instance_bounds(mesh_lo: np.ndarray, mesh_hi: np.ndarray, inst_mesh: np.ndarray,
+def instance_bounds(mesh_lo: np.ndarray, mesh_hi: np.ndarray, inst_mesh: np.ndarray,
                      to_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """World bounds of each instance: the 8 transformed corners of its mesh's box, slightly padded
     so rays grazing a flat mesh still enter its box."""

@@ -42,6 +42,16 @@ def sobol_matrices(n_dims: int) -> np.ndarray:
     return out
 
 
+def sobol_byte_tables(matrices: np.ndarray) -> np.ndarray:
+    """(n_dims, 4, 256) uint32: entry [d, k, x] is the XOR of dimension d's columns 8k..8k+7
+    selected by the bits of x, so a point is four table lookups XORed instead of one XOR per set
+    bit of its index (the same bits: XOR is associative)."""
+    cols = np.asarray(matrices, dtype=np.uint32).reshape(len(matrices), 4, 8)
+    bits = (np.arange(256)[:, None] >> np.arange(8)) & 1                  # (256, 8)
+    picked = np.where(bits[None, None].astype(bool), cols[:, :, None, :], np.uint32(0))
+    return np.bitwise_xor.reduce(picked, axis=3).astype(np.uint32)
+
+
 @lru_cache(maxsize=None)
 def primes(n: int) -> np.ndarray:
     """The first ``n`` primes (int32), by a sieve of Eratosthenes."""

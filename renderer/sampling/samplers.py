@@ -31,7 +31,8 @@ from __future__ import annotations
 
 import warp as wp
 
-from renderer.sampling.lowdiscrepancy import ONE_MINUS_EPSILON, morton2, radical_inverse, scrambled_radical_inverse, sobol_bits, sobol_sample
+from renderer.sampling.lowdiscrepancy import (ONE_MINUS_EPSILON, morton2, radical_inverse, scrambled_radical_inverse, sobol_bits,
+                                              sobol_sample, sobol_sample_bytes)
 from renderer.sampling.rng import hash_u32
 from renderer.sampling.scramble import NONE, hash2, hash3, permutation_element, to_unit
 
@@ -62,7 +63,8 @@ class SamplerParams:
     halton_scale: wp.vec2i  # 2^j and 3^k covering (at most) 128 pixels across and down
     halton_exp: wp.vec2i
     halton_inv: wp.vec2i    # multiplicative inverses for the Chinese remainder theorem
-    matrices: wp.array(dtype=wp.uint32)       # Sobol generator matrices, 32 columns per dimension
+    matrices: wp.array(dtype=wp.uint32)       # sobol: generator matrices, 32 columns per dimension
+    byte_tables: wp.array(dtype=wp.uint32)    # zsobol, paddedsobol: dimensions 0-1 as byte tables (4 x 256 each)
     pixel_inverse: wp.array(dtype=wp.uint32)  # sobol: columns of the pixel -> index GF(2) inverse
     perms: wp.array(dtype=int)                # zsobol: the 24 permutations of four digits
     primes: wp.array(dtype=int)               # halton: the base of each dimension
@@ -191,8 +193,8 @@ def get_1d(p: SamplerParams, s: PixelSample, dim: int) -> float:
     if p.kind == PADDED_SOBOL:
         h = hash3(wp.uint32(s.pixel), wp.uint32(dim), s.seed)
         i = permutation_element(wp.uint32(s.index), wp.uint32(p.spp), h)
-        return to_unit(sobol_sample(p.matrices, 0, i, p.randomize, hash2(h, seed)))
-    return to_unit(sobol_sample(p.matrices, 0, _zsobol_index(p, s, dim), p.randomize, seed))
+        return to_unit(sobol_sample_bytes(p.byte_tables, 0, i, p.randomize, hash2(h, seed)))
+    return to_unit(sobol_sample_bytes(p.byte_tables, 0, _zsobol_index(p, s, dim), p.randomize, seed))
 
 
 @wp.func
@@ -217,8 +219,8 @@ def get_2d(p: SamplerParams, s: PixelSample, dim: int) -> wp.vec2:
         sy = hash2(h, sy)
     else:
         i = _zsobol_index(p, s, dim)
-    return wp.vec2(to_unit(sobol_sample(p.matrices, 0, i, p.randomize, sx)),
-                   to_unit(sobol_sample(p.matrices, 1, i, p.randomize, sy)))
+    return wp.vec2(to_unit(sobol_sample_bytes(p.byte_tables, 0, i, p.randomize, sx)),
+                   to_unit(sobol_sample_bytes(p.byte_tables, 1, i, p.randomize, sy)))
 
 
 @wp.func

@@ -140,3 +140,36 @@ def test_spec_checks_names_and_strata():
         SamplerSpec("stratified", 16, xsamples=3, ysamples=3)
     assert SamplerSpec("zsobol", 12).warning() and SamplerSpec("sobol", 6).warning()
     assert SamplerSpec("zsobol", 16).warning() is None and SamplerSpec("halton", 12).warning() is None
+
+
+def test_byte_tables_give_the_column_xor_bits():
+    """zsobol's and paddedsobol's byte-table lookup returns the same 32 bits as XORing the
+    generator columns of the index's set bits, for indices with every byte populated."""
+    import warp as wp
+
+    from renderer.device.runtime import init_warp
+    from renderer.sampling.lowdiscrepancy import sobol_bits, sobol_bits_bytes
+    from renderer.sampling.lowdiscrepancy_tables import sobol_byte_tables, sobol_matrices
+
+    @wp.kernel
+    def both(m: wp.array(dtype=wp.uint32), t: wp.array(dtype=wp.uint32), a: wp.array(dtype=wp.uint32),
+             out: wp.array(dtype=wp.uint32, ndim=2)):
+        i = wp.tid()
+        for d in range(2):
+            out[i, 2 * d] = sobol_bits(m, d, a[i])
+            out[i, 2 * d + 1] = sobol_bits_bytes(t, d, a[i])
+
+    init_warp()
+    cols = sobol_matrices(2)
+    idx = np.concatenate([np.random.default_rng(0).integers(0, 2 ** 32, 2000, dtype=np.uint64),
+                          [0, 1, 255, 256, 2 ** 24, 2 ** 32 - 1]]).astype(np.uint32)
+    out = wp.zeros((len(idx), 4), dtype=wp.uint32)
+    wp.launch(both, dim=len(idx), inputs=[wp.array(cols.ravel(), dtype=wp.uint32),
+                                          wp.array(sobol_byte_tables(cols).ravel(), dtype=wp.uint32),
+                                          wp.array(idx, dtype=wp.uint32), out])
+    o = out.numpy()
+    np.testing.assert_array_equal(o[:, 0], o[:, 1])
+    np.testing.assert_array_equal(o[:, 2], o[:, 3])
+    bits = (idx[:, None].astype(np.uint64) >> np.arange(32, dtype=np.uint64)) & 1
+    ref0 = np.bitwise_xor.reduce(np.where(bits.astype(bool), cols[0][None], np.uint32(0)), axis=1)
+    np.testing.assert_array_equal(o[:, 1], ref0)
