@@ -27,7 +27,7 @@ from renderer.scene.resolve import NamedMaterials, missing_textures, texture_key
 from renderer.scene.shapes import MeshPool, bilinear_mesh, cylinder, disk, sphere, triangle_mesh
 from renderer.scene.state import GraphicsState, ObjectDefinition, SavedState
 from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, PBRT_V3_NAMES, UNSUPPORTED, WORLD_ONLY
-from renderer.scene.texture_params import check_inputs, read_texture
+from renderer.scene.texture_params import check_depth, read_texture
 from renderer.sampling.sampler_spec import DEFAULT_SAMPLER, RANDOMIZATIONS
 from renderer.settings import sampler_spec
 from renderer.scene.transform import (check_single_precision, from_pbrt_matrix, inverse, look_at,
@@ -339,7 +339,7 @@ class Builder:
         for ref in spec.refs:
             if ref not in self.scene.textures and ref not in self.refused_textures:     # either type, as pbrt
                 raise SceneError(f'Texture "{name}": no texture named "{ref}" is defined before it', d.loc)
-        check_inputs(spec, desc, self.scene.textures)
+        check_depth(spec, desc, self.scene.textures)
         self.warn_unused(d)
         self.scene.textures[key] = desc
 
