@@ -290,7 +290,7 @@ def test_unsupported_things_and_unused_parameters_warn_with_location(tmp_path):
                        'Sampler "stratified" "integer xsamples" 2 "integer ysamples" 3\n'
                        'Integrator "bdpt" "integer maxdepth" 3\nPixelFilter "gaussian"\nColorSpace "aces2065-1"\n'
                        'MakeNamedMedium "fog" "string type" "homogeneous"\nMediumInterface "" ""\n'
-                       'WorldBegin\nShape "sphere" "float radius" 2 "float alpha" 0.5\n'
+                       'WorldBegin\nShape "sphere" "float radius" 2 "float emission" 0.5\n'
                        'Attribute "shape" "float radius" 3\n')
     f = tmp_path / "scene.pbrt"
     assert s.warnings == [
@@ -299,7 +299,7 @@ def test_unsupported_things_and_unused_parameters_warn_with_location(tmp_path):
         f'{f}:3: Integrator "bdpt": rendered with the "path" integrator',
         f"{f}:5: ColorSpace: colours are always linear sRGB",
         f"{f}:6: MakeNamedMedium: {UNSUPPORTED[('MakeNamedMedium', '*')][1]}",
-        f'{f}:9: Shape "sphere": parameter "float alpha" is not supported and was ignored',
+        f'{f}:9: Shape "sphere": parameter "float emission" is not supported and was ignored',
         f"{f}:10: Attribute: default parameters set by Attribute are ignored",
         f"{f}: scene has no lights: the image will be black",
     ]
