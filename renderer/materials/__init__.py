@@ -94,7 +94,8 @@ def material(kind: str, /, *, name: str = "", loc: Location | None = None, **val
     a texture is ``TextureRef("name")``. Unknown parameter names and values out of range are errors."""
     chooser = _selection_kind(kind)
     if chooser is not None:
-        return _selection(chooser, selection.PARAMS[chooser].from_python(values, f'material "{chooser}"', loc), loc, name)
+        values = selection.PARAMS[chooser].from_python(values, f'material "{chooser}"', loc)
+        return _selection(chooser, values, loc, name)
     module = module_of(kind, loc)
     owner = f'material "{kind}"'
     common = {k: values.pop(k) for k in list(values) if k in COMMON.by_name}

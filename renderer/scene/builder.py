@@ -23,7 +23,8 @@ from renderer.scene.parser import Directive
 from renderer.scene.imaging import read_camera, read_film, read_filter
 from renderer.scene.loop_subdivision import loop_subdivision_surface
 from renderer.scene.plymesh import ply_mesh
-from renderer.scene.resolve import NamedMaterials, missing_mixed, missing_textures, texture_key
+from renderer.scene.resolve import (NamedMaterials, drop_interface_lights, missing_mixed, missing_textures,
+                                    texture_key)
 from renderer.scene.shapes import MeshPool, bilinear_mesh, cylinder, disk, sphere, triangle_mesh
 from renderer.scene.state import GraphicsState, ObjectDefinition, SavedState
 from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, PBRT_V3_NAMES, UNSUPPORTED, WORLD_ONLY
@@ -102,6 +103,7 @@ class Builder:
         if not lights.has_lights(self.scene):
             self.scene.warnings.append(f"{self.source}: scene has no lights: the image will be black")
         unresolved = self.named_materials.resolve(self.scene, lambda: self._current_material(None))
+        drop_interface_lights(self.scene, self.warn)
         return (unresolved + missing_textures(self.scene, self.refused_textures)
                 + missing_mixed(self.scene, self.named_materials))
 

@@ -85,3 +85,12 @@ def missing_mixed(scene: SceneDescription, named: NamedMaterials) -> list[SceneE
                        'in the scene)', m.loc)
             for m in scene.materials if m.kind == "mix" for n in m.values.get("materials", ())
             if n not in named.index and n not in named.refused]
+
+
+def drop_interface_lights(scene: SceneDescription, warn: Callable[[Location, str], None]) -> None:
+    """pbrt-v4 ignores an area light on a shape with the interface material (with a warning): the
+    shape is not there to emit."""
+    for i, s in enumerate(scene.shapes):
+        if s.area_light is not None and scene.materials[s.material].kind == "interface":
+            warn(s.loc, 'ignoring the area light of a shape with the "interface" material (as pbrt-v4 does)')
+            scene.shapes[i] = replace(s, area_light=None)

@@ -115,3 +115,11 @@ def test_a_mix_of_the_interface_material_and_a_cycle_of_mixes_are_refused(tmp_pa
                                                   '"string materials" ["d" "i"]\nNamedMaterial "m"\nShape "sphere"\n'))
         with pytest.raises(UnsupportedError, match=match):
             upload(scene, "cpu")
+
+
+def test_an_area_light_on_an_interface_shape_is_ignored_with_a_warning_as_pbrt(tmp_path):
+    path = write(tmp_path, 'AttributeBegin\nAreaLightSource "diffuse"\nMaterial "interface"\nShape "sphere"\n'
+                           'AttributeEnd\nShape "disk"\n')
+    s = load_description(path)
+    assert s.shapes[0].area_light is None
+    assert f'{path}:7: ignoring the area light of a shape with the "interface" material (as pbrt-v4 does)' in s.warnings
