@@ -21,10 +21,10 @@ if TYPE_CHECKING:   # only annotations: importing the scene package here would m
     from renderer.scene.params import ParamSet
 
 #: Parameter types: "float" and "rgb" may be textures and get a device slot; "bool" gets a flag
-#: bit; "int", "string", "point3" (a position, e.g. a light's "from") and "floats" (a list of any
-#: length, e.g. a stack's per-layer values) are host-side only (they shape the table, not the
-#: per-hit value).
-TYPES = ("float", "rgb", "bool", "int", "string", "point3", "floats")
+#: bit; "int", "string", "strings" (a list of names, e.g. a mix's materials), "point3" (a position,
+#: e.g. a light's "from") and "floats" (a list of any length, e.g. a stack's per-layer values) are
+#: host-side only (they shape the table, not the per-hit value).
+TYPES = ("float", "rgb", "bool", "int", "string", "strings", "point3", "floats")
 
 
 @dataclass(frozen=True)
@@ -64,6 +64,10 @@ class Parameter:
             if not isinstance(value, str):
                 raise SceneError(f'{owner}: parameter "{self.name}" must be a string, got {value!r}', loc)
             return value
+        if self.type == "strings":
+            if isinstance(value, str) or not all(isinstance(v, str) for v in value):
+                raise SceneError(f'{owner}: parameter "{self.name}" must be a list of strings, got {value!r}', loc)
+            return tuple(value)
         try:
             a = np.asarray(value, dtype=np.float64)
         except (TypeError, ValueError):
@@ -116,6 +120,10 @@ class Parameter:
             v = ps.floats(self.name, ("point3", "point"))
         elif self.type == "floats":
             v = ps.floats(self.name)
+        elif self.type == "strings":
+            if p.type != "string":
+                raise SceneError(f'{owner}: parameter "{self.name}" must be of type string, not {p.type}', loc)
+            v = tuple(ps.get(self.name).values)
         else:
             v = ps.string(self.name)
         return self.check(v, owner, loc)

@@ -12,7 +12,7 @@ from renderer.errors import SceneError
 from renderer.geometry.instances import Geometry, GeometryData, build_geometry
 from renderer.lights import build_light_table, kinds_in
 from renderer.lights.table import Lights
-from renderer.materials import Materials, build_materials, disney, thinfilm
+from renderer.materials import Materials, build_materials, disney, selection, thinfilm
 from renderer.color.rgb_weights import RgbWeightTable, make_rgb_weight_table
 from renderer.scene.description import SceneDescription
 from renderer.settings import THIN_FILM_MODE, thin_film_samples
@@ -29,6 +29,7 @@ class Scene:
     shape_material: wp.array(dtype=int)
     shape_light: wp.array(dtype=int)
     shape_flip: wp.array(dtype=int)
+    shape_alpha: wp.array(dtype=int)    # alpha texture id, -1 opaque (see renderer.integrators.visibility)
     spectral: RgbWeightTable    # the thin-film BSDF's spectrum → RGB weights (1 dummy entry if unused)
     spectral_n: int             # its wavelengths per evaluation, 0 for rgb3
 
@@ -43,6 +44,8 @@ class Features:
     escaping: tuple[str, ...]   # the kinds a ray leaving the scene can see (an environment, a soft sun)
     nee: bool = True
     subsurface: bool = False    # some disney material scatters below its surface (renderer.subsurface)
+    alpha: bool = False         # some shape has an alpha cut-out or the interface material
+    mix: bool = False           # some material is a mix (chosen per hit before shading)
 
 
 @dataclass
@@ -95,6 +98,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
 
     geo = build_geometry([(m.positions, m.indices, m.normals, m.uvs) for m in desc.meshes],
                          inst_mesh_a, inst_shape_a, xform_a, device)
+    alpha = shape_alpha_ids(desc, table)
     tex, tex_keep = table.upload(device)
     L, light_keep = lights.upload(device)
 
@@ -111,6 +115,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     # pbrt's handedness swap, so together they orient normals as pbrt does
     flip = [int(s.reverse_orientation) for s in desc.shapes] or [0]
     S.shape_flip = wp.array(np.array(flip, np.int32), dtype=int, device=device)
+    S.shape_alpha = wp.array(alpha, dtype=int, device=device)
     S.spectral, S.spectral_n = _spectral_table(thinfilm.NAME in used, thin_film, device)
 
     light_kinds, escaping = kinds_in(lights)
@@ -121,7 +126,23 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
         escaping=escaping,
         nee=nee,
         subsurface=any(m.kind == disney.NAME and disney.has_subsurface(m.values) for m in desc.materials),
+        alpha=bool(np.any(alpha >= 0)),
+        mix=any(m.kind == selection.MIX for m in desc.materials),
     )
     keep = [geo, mat_keep, tex_keep, light_keep, cam_keep, S.shape_material, S.shape_light, S.shape_flip,
-            S.spectral.w]
+            S.shape_alpha, S.spectral.w]
     return DeviceScene(struct=S, features=feats, device=device, width=width, height=height, keep=keep, geometry=geo)
+
+
+def shape_alpha_ids(desc: SceneDescription, table: TextureTable) -> np.ndarray:
+    """Per shape the texture id of its alpha (a constant 0 for the interface material), -1 where
+    the shape is opaque (alpha 1, pbrt-v4's default)."""
+    ids = -np.ones(max(1, len(desc.shapes)), np.int32)
+    for i, s in enumerate(desc.shapes):
+        if desc.materials[s.material].kind == selection.INTERFACE:
+            ids[i] = table.add_constant(0.0)
+        elif isinstance(s.alpha, str):
+            ids[i] = table.lookup(s.alpha, "float", desc.textures, s.loc)
+        elif s.alpha < 1.0:
+            ids[i] = table.add_constant(s.alpha)
+    return ids

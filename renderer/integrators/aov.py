@@ -21,8 +21,10 @@ import warp as wp
 from renderer.camera import generate_ray
 from renderer.device.kernel_options import KERNEL_OPTIONS
 from renderer.device.scene import Features, Scene
-from renderer.geometry.intersect import intersect, surface_at
+from renderer.geometry.intersect import surface_at
 from renderer.integrators.shading import load_bsdf, shading_functions
+from renderer.integrators.visibility import ray_queries
+from renderer.materials.selection import choose_material
 from renderer.sampling.frames import to_local
 from renderer.sampling.rng import sample_rng
 
@@ -38,6 +40,8 @@ AOV_CHANNELS = {"albedo": ("R", "G", "B"), "normal": ("X", "Y", "Z"), "depth": (
 @lru_cache(maxsize=None)
 def aov_kernel(features: Features) -> wp.Kernel:
     shading_frame, _, sample_bsdf = shading_functions(features)
+    closest = ray_queries(features).closest
+    mixes = features.mix
 
     @wp.kernel(module="unique", module_options=KERNEL_OPTIONS)
     def first_hit(scene: Scene, seed: int, n_samples: int, albedo: wp.array(dtype=wp.vec3),
@@ -48,11 +52,11 @@ def aov_kernel(features: Features) -> wp.Kernel:
         px = pixel % width
         py = pixel // width
         centre = generate_ray(scene.cam, float(px) + 0.5, float(py) + 0.5, wp.vec2(0.5, 0.5))
-        seen = intersect(scene.geo, centre.o, centre.d, 1.0e30)
+        seen = closest(scene, centre.o, centre.d, 1.0e30)
         material[pixel] = -1.0
         instance[pixel] = -1.0
         if seen.inst >= 0:
-            material[pixel] = float(scene.shape_material[scene.geo.inst_shape[seen.inst]])
+            material[pixel] = float(scene.shape_material[scene.geo.inst_shape[seen.inst]])   # a mix's own id
             instance[pixel] = float(seen.inst)
         a = wp.vec3(0.0)
         n = wp.vec3(0.0)
@@ -63,11 +67,13 @@ def aov_kernel(features: Features) -> wp.Kernel:
             jit = wp.vec2(wp.randf(rng), wp.randf(rng))  # drawn inline: Warp passes rng by value
             ray = generate_ray(scene.cam, float(px) + jit[0], float(py) + jit[1],
                                wp.vec2(wp.randf(rng), wp.randf(rng)))
-            hit = intersect(scene.geo, ray.o, ray.d, 1.0e30)
+            hit = closest(scene, ray.o, ray.d, 1.0e30)
             if hit.inst >= 0:
                 shape = scene.geo.inst_shape[hit.inst]
                 s = surface_at(scene.geo, hit, scene.shape_flip[shape] != 0)
                 m = scene.shape_material[shape]
+                if wp.static(mixes):
+                    m = choose_material(scene.mat.kind, scene.mat.mix, scene.tex, m, s, -ray.d)
                 b = load_bsdf(scene.mat, scene.tex, scene.spectral, scene.spectral_n, m, s)
                 b.wavelength_u = wp.randf(rng)
                 frame = shading_frame(scene, m, s)

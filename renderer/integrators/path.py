@@ -17,13 +17,15 @@ import warp as wp
 from renderer.camera import generate_ray
 from renderer.device.kernel_options import KERNEL_OPTIONS
 from renderer.device.scene import Features, Scene
-from renderer.geometry.intersect import intersect, occluded, surface_at
+from renderer.geometry.intersect import surface_at
 from renderer.geometry.offsets import offset_origin, ray_epsilon
 from renderer.integrators.shading import load_bsdf, shading_functions
 from renderer.integrators.subsurface import subsurface_scatter
+from renderer.integrators.visibility import ray_queries
 from renderer.lights import dispatch
 from renderer.lights.sample import LightEval, light_sampler
 from renderer.materials.bsdf import SPECULAR
+from renderer.materials.selection import choose_material
 from renderer.pixel_filter import sample_filter
 from renderer.sampling.frames import to_local, to_world
 from renderer.sampling.mis import power_heuristic
@@ -55,6 +57,8 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
     nee = features.nee
     light_sampling = nee and len(features.lights) > 0
     has_sss = features.subsurface
+    closest, blocked = ray_queries(features)
+    mixes = features.mix
 
     @wp.kernel(module="unique", module_options=KERNEL_OPTIONS)
     def integrate(scene: Scene, smp: SamplerParams, seed: int, sample_index: int, row_offset: int, max_depth: int,
@@ -89,7 +93,7 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
         prev_p = o
         depth = int(0)
         while True:
-            hit = intersect(scene.geo, o, d, 1.0e30)
+            hit = closest(scene, o, d, 1.0e30)
             n_rays += 1
             if hit.inst < 0:
                 for j in range(wp.static(len(seen))):
@@ -112,6 +116,8 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
             if depth >= max_depth:
                 break
             m = scene.shape_material[shape]
+            if wp.static(mixes):
+                m = choose_material(scene.mat.kind, scene.mat.mix, scene.tex, m, s, wo)
             b = load_bsdf(scene.mat, scene.tex, scene.spectral, scene.spectral_n, m, s)
             # this bounce's numbers, drawn before any of them is used (the same stream order as ever)
             u_sss = int(0)
@@ -163,7 +169,7 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
                             to_light = wp.dot(s.p + ls.wi * ls.dist - origin, ls.wi)
                             t_max = to_light * (1.0 - 1.0e-4) - ray_epsilon(s.p)
                             n_rays += 1
-                            if not occluded(scene.geo, origin, ls.wi, t_max):
+                            if not blocked(scene, origin, ls.wi, t_max):
                                 w = float(1.0)
                                 if not ls.delta:
                                     w = power_heuristic(ls.pdf, fb.pdf)

@@ -18,7 +18,7 @@ import warp as wp
 
 from renderer.errors import Location, SceneError, UnsupportedError
 from renderer.materials import (coatedconductor, coateddiffuse, conductor, dielectric, diffuse, diffusetransmission, disney,
-                                thindielectric, thinfilm)
+                                selection, thindielectric, thinfilm)
 from renderer.materials.bsdf import FIRST_DERIVED_FLAG, MAX_SLOTS
 from renderer.parameters import Parameter, Parameters, TextureRef
 from renderer.scene.description import MaterialDesc, TextureDesc
@@ -52,18 +52,30 @@ def dispatch_table(names: tuple[str, ...]) -> tuple[list[ModuleType], list[int]]
 
 
 def module_of(kind: str, loc: Location | None = None) -> ModuleType:
-    """The module of a material type; pbrt's interface material and unknown types are refused."""
-    if kind in ("", "none", "interface"):
-        raise UnsupportedError(f'material "{kind or "none"}" (pbrt\'s interface material) is not supported: it '
-                               'marks a boundary between participating media, which are not implemented', loc)
+    """The module of a BSDF material type; unknown types are refused."""
     module = REGISTRY.get(kind)
     if module is None:
-        raise UnsupportedError(f'material "{kind}" is not supported (supported: {", ".join(REGISTRY)})', loc)
+        known = ", ".join([*REGISTRY, *selection.PARAMS])
+        raise UnsupportedError(f'material "{kind}" is not supported (supported: {known})', loc)
     return module
+
+
+def _selection_kind(kind: str) -> str | None:
+    """"mix" or "interface" for pbrt-v4's materials that are not a BSDF ("" and "none" are its
+    names for interface too), else None."""
+    return selection.INTERFACE if kind in ("", "none") else kind if kind in selection.PARAMS else None
+
+
+def _selection(kind: str, values: dict[str, Any], loc: Location | None, name: str) -> MaterialDesc:
+    if kind == selection.MIX and len(values.get("materials", ())) != 2:
+        raise SceneError('material "mix": "string materials" must name exactly two named materials', loc)
+    return MaterialDesc(kind, values, loc, name)
 
 
 def resolve(desc: MaterialDesc) -> tuple[dict[str, Any], int]:
     """The values a material uploads (derived ones included) and its flag bits beyond the bools."""
+    if desc.kind in selection.PARAMS:
+        return dict(desc.values), 0
     module = module_of(desc.kind, desc.loc)
     hook = getattr(module, "resolve", None)
     return hook(dict(desc.values), desc.loc) if hook else (dict(desc.values), 0)
@@ -80,6 +92,10 @@ def _checked(desc: MaterialDesc) -> MaterialDesc:
 def material(kind: str, /, *, name: str = "", loc: Location | None = None, **values: Any) -> MaterialDesc:
     """A material from plain Python values, e.g. ``material("diffuse", reflectance=(0.8, 0.2, 0.2))``;
     a texture is ``TextureRef("name")``. Unknown parameter names and values out of range are errors."""
+    chooser = _selection_kind(kind)
+    if chooser is not None:
+        values = selection.PARAMS[chooser].from_python(values, f'material "{chooser}"', loc)
+        return _selection(chooser, values, loc, name)
     module = module_of(kind, loc)
     owner = f'material "{kind}"'
     common = {k: values.pop(k) for k in list(values) if k in COMMON.by_name}
@@ -90,6 +106,9 @@ def material(kind: str, /, *, name: str = "", loc: Location | None = None, **val
 def from_pbrt(kind: str, params: ParamSet, loc: Location, name: str = "") -> MaterialDesc:
     """A material from a pbrt parameter list; what it does not declare stays unread in ``params``
     for the caller's "not supported and was ignored" warning."""
+    chooser = _selection_kind(kind)
+    if chooser is not None:
+        return _selection(chooser, selection.PARAMS[chooser].from_pbrt(params, f'material "{chooser}"'), loc, name)
     module = module_of(kind, loc)
     owner = f'material "{kind}"'
     v = module.PARAMS.from_pbrt(params, owner) | COMMON.from_pbrt(params, owner)
@@ -99,6 +118,7 @@ def from_pbrt(kind: str, params: ParamSet, loc: Location, name: str = "") -> Mat
 def parameter_tables() -> str:
     """The parameter table of every material, as docs/materials.md shows them."""
     parts = [f"### `{name}`\n\n{m.PARAMS.docs_table()}\n" for name, m in REGISTRY.items()]
+    parts += [f"### `{name}`\n\n{p.docs_table()}\n" for name, p in selection.PARAMS.items() if len(p.by_name)]
     parts.append(f"### every material\n\n{COMMON.docs_table()}\n")
     return "\n".join(parts)
 
@@ -114,6 +134,7 @@ class Materials:
     layer_count: wp.array(dtype=int)    # and its number of rows (0: no stack)
     bounds: wp.array2d(dtype=wp.vec2)   # (n_materials, MAX_SLOTS) each slot's declared [lo, hi]: textures are
                                         # clamped to it as pbrt clamps (a reflectance texture of 100 reflects 1)
+    mix: wp.array(dtype=wp.vec3i)       # a mix's (first, second material, amount texture id)
 
 
 def device_layout(desc: MaterialDesc) -> tuple[list[tuple[Parameter, Any]], int]:
@@ -150,7 +171,11 @@ def build_materials(descs: list[MaterialDesc], textures: dict[str, TextureDesc],
     rows = [np.zeros((1, 4), np.float32)]
     n_rows = 1
     bounds = np.tile(np.array([-FLOAT_MAX, FLOAT_MAX], np.float32), (n, MAX_SLOTS, 1))
+    mix = mix_table(descs, table, textures)
     for i, d in enumerate(descs):
+        if d.kind in selection.PARAMS:
+            kinds[i] = selection.MIX_KIND if d.kind == selection.MIX else selection.INTERFACE_KIND
+            continue
         rows_of = getattr(module_of(d.kind, d.loc), "layer_rows", None)
         if rows_of is not None:
             mine = rows_of(resolve(d)[0], d.loc)
@@ -172,5 +197,37 @@ def build_materials(descs: list[MaterialDesc], textures: dict[str, TextureDesc],
     M.layer_first = wp.array(first, dtype=int, device=device)
     M.layer_count = wp.array(count, dtype=int, device=device)
     M.bounds = wp.array(bounds, dtype=wp.vec2, device=device)
-    keep = [M.kind, M.slots, M.flags, M.bump, M.layers, M.layer_first, M.layer_count, M.bounds]
-    return M, keep, {d.kind for d in descs}
+    M.mix = wp.array(mix, dtype=wp.vec3i, device=device)
+    keep = [M.kind, M.slots, M.flags, M.bump, M.layers, M.layer_first, M.layer_count, M.bounds, M.mix]
+    return M, keep, {d.kind for d in descs} - set(selection.PARAMS)
+
+
+def mix_table(descs: list[MaterialDesc], table: TextureTable, textures: dict[str, TextureDesc]) -> np.ndarray:
+    """(n, 3) per mix material its two materials' indices (named materials, by name) and its amount
+    texture; zeros elsewhere. A mix of the interface material, a chain of mixes deeper than
+    selection.MAX_DEPTH and a cycle are refused."""
+    out = np.zeros((max(1, len(descs)), 3), np.int32)
+    named = {d.name: i for i, d in enumerate(descs) if d.name}
+    for i, d in enumerate(descs):
+        if d.kind != selection.MIX:
+            continue
+        for j, child in enumerate(d.values["materials"]):
+            if child not in named:
+                raise SceneError(f'material "mix": no named material "{child}"', d.loc)
+            if descs[named[child]].kind == selection.INTERFACE:
+                raise UnsupportedError(f'material "mix": a mix of the interface material ("{child}") is not supported',
+                                       d.loc)
+            out[i, j] = named[child]
+        p = selection.PARAMS[selection.MIX].by_name["amount"]
+        out[i, 2] = _texture_id(p, selection.PARAMS[selection.MIX].value(d.values, "amount"), table, textures, d.loc)
+    def depth(m: int, chain: frozenset[int]) -> int:
+        if descs[m].kind != selection.MIX:
+            return 0
+        if m in chain or len(chain) >= selection.MAX_DEPTH:
+            raise UnsupportedError(f'material "mix": mixes of mixes nest deeper than {selection.MAX_DEPTH} '
+                                   "(or form a cycle)", descs[m].loc)
+        return 1 + max(depth(int(c), chain | {m}) for c in out[m, :2])
+
+    for i in range(len(descs)):
+        depth(i, frozenset())
+    return out

@@ -30,6 +30,20 @@ def hash3(a: wp.uint32, b: wp.uint32, c: wp.uint32) -> wp.uint32:
 
 
 @wp.func
+def _word(x: float, scale: float) -> wp.uint32:
+    """The low 32 bits of a coordinate at resolution 1/scale (nearby values differ in them)."""
+    return wp.uint32(wp.int64(wp.floor(x * scale)) & wp.int64(0xFFFFFFFF))
+
+
+@wp.func
+def hash_point_direction(p: wp.vec3, d: wp.vec3) -> wp.uint32:
+    """A hash of a point (at 2^-20 resolution) and a unit direction (2^-24): pbrt-v4's HashFloat
+    of a ray, for choices that must be a function of the ray alone (alpha, the mix material)."""
+    a = hash3(_word(p[0], 1048576.0), _word(p[1], 1048576.0), _word(p[2], 1048576.0))
+    return hash2(a, hash3(_word(d[0], 16777216.0), _word(d[1], 16777216.0), _word(d[2], 16777216.0)))
+
+
+@wp.func
 def to_unit(v: wp.uint32) -> float:
     """A 32-bit fixed-point fraction as a float32 strictly below 1 (its top 24 bits)."""
     return float(v >> wp.uint32(8)) * (1.0 / 16777216.0)

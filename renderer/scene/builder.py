@@ -23,11 +23,12 @@ from renderer.scene.parser import Directive
 from renderer.scene.imaging import read_camera, read_film, read_filter
 from renderer.scene.loop_subdivision import loop_subdivision_surface
 from renderer.scene.plymesh import ply_mesh
-from renderer.scene.resolve import NamedMaterials, missing_textures, texture_key
+from renderer.scene.resolve import (NamedMaterials, drop_interface_lights, missing_mixed, missing_textures,
+                                    texture_key)
 from renderer.scene.shapes import MeshPool, bilinear_mesh, cylinder, disk, sphere, triangle_mesh
 from renderer.scene.state import GraphicsState, ObjectDefinition, SavedState
 from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, PBRT_V3_NAMES, UNSUPPORTED, WORLD_ONLY
-from renderer.scene.texture_params import check_inputs, read_texture
+from renderer.scene.texture_params import check_depth, read_texture
 from renderer.sampling.sampler_spec import DEFAULT_SAMPLER, RANDOMIZATIONS
 from renderer.settings import sampler_spec
 from renderer.scene.transform import (check_single_precision, from_pbrt_matrix, inverse, look_at,
@@ -102,7 +103,9 @@ class Builder:
         if not lights.has_lights(self.scene):
             self.scene.warnings.append(f"{self.source}: scene has no lights: the image will be black")
         unresolved = self.named_materials.resolve(self.scene, lambda: self._current_material(None))
-        return unresolved + missing_textures(self.scene, self.refused_textures)
+        drop_interface_lights(self.scene, self.warn)
+        return (unresolved + missing_textures(self.scene, self.refused_textures)
+                + missing_mixed(self.scene, self.named_materials))
 
     # -- reporting
 
@@ -339,7 +342,7 @@ class Builder:
         for ref in spec.refs:
             if ref not in self.scene.textures and ref not in self.refused_textures:     # either type, as pbrt
                 raise SceneError(f'Texture "{name}": no texture named "{ref}" is defined before it', d.loc)
-        check_inputs(spec, desc, self.scene.textures)
+        check_depth(spec, desc, self.scene.textures)
         self.warn_unused(d)
         self.scene.textures[key] = desc
 
@@ -363,6 +366,9 @@ class Builder:
         if make is None:
             self.unsupported(d.name, name, d.loc)
             return
+        alpha = d.params.float_or_texture("alpha", 1.0)
+        if self.state.area_light is not None and alpha != 1.0:
+            raise UnsupportedError(f'Shape "{name}": "alpha" on an area light is not supported', d.loc)
         mesh = self.mesh_pool.shape(name, make, d.params, d.loc)
         self.warn_unused(d)
         if len(mesh.indices) == 0:
@@ -380,7 +386,7 @@ class Builder:
         self.scene.shapes.append(ShapeDesc(
             mesh=self.mesh_pool.add(mesh), material=self._current_material(d.loc),
             area_light=self.state.area_light,
-            reverse_orientation=self.state.reverse_orientation ^ swaps_handedness(ctm), loc=d.loc))
+            reverse_orientation=self.state.reverse_orientation ^ swaps_handedness(ctm), loc=d.loc, alpha=alpha))
         index = len(self.scene.shapes) - 1
         if obj is not None:
             obj.shapes.append(index)

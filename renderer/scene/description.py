@@ -145,6 +145,7 @@ class ShapeDesc:
     area_light: LightDesc | None = None  # an area light ("diffuse") that every instance emits
     reverse_orientation: bool = False
     loc: Location | None = None
+    alpha: float | str = 1.0             # pbrt-v4's cut-out: a constant, or a float texture's name
 
 
 @dataclass

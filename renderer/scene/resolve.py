@@ -67,9 +67,30 @@ def texture_key(textures: dict[str, TextureDesc], name: str, value_type: str, lo
 
 
 def missing_textures(scene: SceneDescription, refused: set[str]) -> list[SceneError]:
-    """Every material parameter naming a texture the scene never defines, one error each (a
-    texture whose class was refused has been reported already)."""
-    return [SceneError(f'material "{m.kind}": parameter "{key}" names texture "{v.name}", which is not defined',
-                       m.loc)
-            for m in scene.materials for key, v in m.values.items()
-            if isinstance(v, TextureRef) and v.name not in scene.textures and v.name not in refused]
+    """Every material parameter and shape alpha naming a texture the scene never defines, one error
+    each (a texture whose class was refused has been reported already)."""
+    missing = [SceneError(f'material "{m.kind}": parameter "{key}" names texture "{v.name}", which is not defined',
+                          m.loc)
+               for m in scene.materials for key, v in m.values.items()
+               if isinstance(v, TextureRef) and v.name not in scene.textures and v.name not in refused]
+    return missing + [SceneError(f'shape "alpha" names texture "{s.alpha}", which is not defined', s.loc)
+                      for s in scene.shapes
+                      if isinstance(s.alpha, str) and s.alpha not in scene.textures and s.alpha not in refused]
+
+
+def missing_mixed(scene: SceneDescription, named: NamedMaterials) -> list[SceneError]:
+    """Every material a mix names that no MakeNamedMaterial defines (pbrt-v4 resolves them when the
+    scene is complete, so they may come later in the file)."""
+    return [SceneError(f'material "mix": no named material "{n}" (no MakeNamedMaterial defines it anywhere '
+                       'in the scene)', m.loc)
+            for m in scene.materials if m.kind == "mix" for n in m.values.get("materials", ())
+            if n not in named.index and n not in named.refused]
+
+
+def drop_interface_lights(scene: SceneDescription, warn: Callable[[Location, str], None]) -> None:
+    """pbrt-v4 ignores an area light on a shape with the interface material (with a warning): the
+    shape is not there to emit."""
+    for i, s in enumerate(scene.shapes):
+        if s.area_light is not None and scene.materials[s.material].kind == "interface":
+            warn(s.loc, 'ignoring the area light of a shape with the "interface" material (as pbrt-v4 does)')
+            scene.shapes[i] = replace(s, area_light=None)

@@ -51,4 +51,5 @@ WORLD_ONLY = frozenset({"AttributeBegin", "AttributeEnd", "Attribute", "Shape", 
 #: pbrt-v4's texture classes, and the ones this renderer implements.
 TEXTURE_CLASSES = frozenset({"bilerp", "checkerboard", "constant", "directionmix", "dots", "fbm", "imagemap", "marble",
                              "mix", "ptex", "scale", "windy", "wrinkled"})
-SUPPORTED_TEXTURES = frozenset({"constant", "imagemap", "checkerboard", "scale", "mix", "directionmix", "bilerp"})
+SUPPORTED_TEXTURES = frozenset({"constant", "imagemap", "checkerboard", "scale", "mix", "directionmix", "bilerp",
+                                "dots", "fbm", "wrinkled", "windy", "marble"})

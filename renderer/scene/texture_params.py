@@ -18,6 +18,8 @@ from renderer.scene.support import SUPPORTED_TEXTURES, TEXTURE_CLASSES
 WRAP = {"repeat": 0, "clamp": 1, "black": 2}
 #: pbrt-v4's 2D texture mappings, numbered as the device reads them
 MAPPINGS = {"uv": 0, "spherical": 1, "cylindrical": 2, "planar": 3}
+#: values the device's postfix evaluation of a combined texture may hold at once
+STACK_DEPTH = 8
 
 Value = float | np.ndarray        # a float texture's scalar or a spectrum texture's RGB
 
@@ -41,8 +43,12 @@ class TextureSpec:
     invert: bool = False                             # imagemap: 1 - value, clamped at 0
     corners: tuple | None = None                     # bilerp: v00, v01, v10, v11
     #: mix: (tex1, tex2, amount); directionmix: (tex1, tex2); product (a scale of two textures):
-    #: (tex, scale). Each a texture's name or a constant.
+    #: (tex, scale); select: (first, second). Each a texture's name or a constant.
     inputs: tuple = ()
+    #: select: which pattern picks the second input ("checker2d", "checker3d" or "dots")
+    pattern: str = ""
+    #: fbm, wrinkled, marble: (octaves, roughness, scale, variation)
+    noise: tuple[float, float, float, float] = (8.0, 0.5, 1.0, 0.2)
 
     @property
     def refs(self) -> list[str]:
@@ -68,14 +74,60 @@ def read_texture(desc: TextureDesc) -> TextureSpec:
         return _scale(desc, where)
     if desc.kind in ("mix", "directionmix"):
         return _mix(desc)
+    if desc.kind in NOISE_TEXTURES:
+        return _noise(desc, where)
+    if desc.kind == "checkerboard" and p.int("dimension", 2) != 2:
+        return _checkerboard_3d(desc, where)
     mapped = _mapping(desc, where)
     if desc.kind == "bilerp":
         return _bilerp(desc, where, mapped, const)
+    read = p.float_or_texture if desc.value_type == "float" else p.rgb_or_texture
+    if desc.kind == "dots":
+        # pbrt-v4 hands "inside" to its DotsTexture's outsideDot and "outside" to insideDot, so
+        # its dots show "outside" (default 0) and the space between them "inside" (default 1)
+        return replace(mapped, kind="select", value=1.0, pattern="dots", inputs=(read("inside", 1.0),
+                                                                                read("outside", 0.0)))
     if desc.kind == "checkerboard":
-        if p.int("dimension", 2) != 2:
-            raise UnsupportedError(f"{where}: only 2D checkerboard textures are supported", desc.loc)
-        return replace(mapped, kind="checkerboard", value=const("tex1", 1.0), alt=const("tex2", 0.0))
+        tex1, tex2 = read("tex1", 1.0), read("tex2", 0.0)
+        if isinstance(tex1, str) or isinstance(tex2, str):
+            return replace(mapped, kind="select", value=1.0, pattern="checker2d", inputs=(tex1, tex2))
+        return replace(mapped, kind="checkerboard", value=tex1, alt=tex2)
     return _imagemap(desc, where, mapped)
+
+
+#: pbrt-v4's noise textures, and the value type each exists for
+NOISE_TEXTURES = {"fbm": "float", "wrinkled": "float", "windy": "float", "marble": "spectrum"}
+
+
+def _texture_from_world(desc: TextureDesc) -> tuple[float, ...]:
+    """pbrt-v4's TextureMapping3D: the point in texture space (the CTM at the Texture directive)."""
+    return tuple(float(x) for x in np.linalg.inv(desc.ctm if desc.ctm is not None else np.eye(4)).ravel())
+
+
+def _noise(desc: TextureDesc, where: str) -> TextureSpec:
+    """fbm and wrinkled (octaves, roughness), windy, marble (also scale, variation), with pbrt-v4's
+    defaults, of the texture-space point."""
+    if desc.value_type != NOISE_TEXTURES[desc.kind]:
+        raise SceneError(f'{where}: pbrt-v4 has "{desc.kind}" as a {NOISE_TEXTURES[desc.kind]} texture only',
+                         desc.loc)
+    p = desc.params
+    noise = (8.0, 0.5, 1.0, 0.2)
+    if desc.kind != "windy":
+        noise = (float(p.int("octaves", 8, min=0)), p.float("roughness", 0.5), 1.0, 0.2)
+    if desc.kind == "marble":
+        noise = (*noise[:2], p.float("scale", 1.0), p.float("variation", 0.2))
+    return TextureSpec(desc.kind, 1.0, xform=_texture_from_world(desc), noise=noise)
+
+
+def _checkerboard_3d(desc: TextureDesc, where: str) -> TextureSpec:
+    """pbrt-v4's 3D checkerboard: tex1 where floor(x) + floor(y) + floor(z) of the texture-space
+    point is even, tex2 where it is odd."""
+    p = desc.params
+    if p.int("dimension", 2) != 3:
+        raise SceneError(f'{where}: checkerboard "dimension" must be 2 or 3', p.params["dimension"].loc)
+    read = p.float_or_texture if desc.value_type == "float" else p.rgb_or_texture
+    return TextureSpec("select", 1.0, xform=_texture_from_world(desc), pattern="checker3d",
+                       inputs=(read("tex1", 1.0), read("tex2", 0.0)))
 
 
 def _mapping(desc: TextureDesc, where: str) -> TextureSpec:
@@ -142,18 +194,25 @@ def check_encoding(encoding: str, where: str, loc: Location) -> None:
     raise SceneError(f'{where}: encoding must be "sRGB", "linear" or "gamma G" with G > 0, got "{encoding}"', loc)
 
 
-def check_inputs(spec: TextureSpec, desc: TextureDesc, textures: dict[str, TextureDesc]) -> None:
-    """A mix, directionmix or product reads plain textures only (the device evaluates one level):
-    refused at load otherwise."""
-    def combines(name: str, value_type: str) -> bool:
-        s = read_texture(find_texture(textures, name, value_type))
-        return bool(s.inputs) or (s.base is not None and s.base in textures and combines(s.base, value_type))
+def program_depth(spec: TextureSpec, textures: dict[str, TextureDesc], value_type: str) -> int:
+    """How many values the device's postfix evaluation of this texture holds at once (a leaf: 1)."""
+    if spec.base is not None:
+        base = find_texture(textures, spec.base, value_type)
+        return program_depth(read_texture(base), textures, value_type) if base is not None else 1
+    types = (value_type, value_type, "float") if spec.kind == "mix" else (value_type,) * 2
+    depth = 1
+    for i, (r, t) in enumerate(zip(spec.inputs, types)):
+        sub = find_texture(textures, r, t) if isinstance(r, str) else None
+        depth = max(depth, i + (program_depth(read_texture(sub), textures, t) if sub is not None else 1))
+    return depth
 
-    types = (desc.value_type, desc.value_type, "float")
-    nested = [r for r, t in zip(spec.inputs, types) if isinstance(r, str) and r in textures and combines(r, t)]
-    if nested:
-        raise UnsupportedError(f'Texture "{desc.name}": its input "{nested[0]}" is itself a mix, directionmix or '
-                               "scale of two textures; one level of these is supported", desc.loc)
+
+def check_depth(spec: TextureSpec, desc: TextureDesc, textures: dict[str, TextureDesc]) -> None:
+    """Textures combine textures to any depth, but the device evaluates them with a stack of
+    STACK_DEPTH values: refused at load beyond it."""
+    if program_depth(spec, textures, desc.value_type) > STACK_DEPTH:
+        raise UnsupportedError(f'Texture "{desc.name}": its inputs nest too deeply (the device evaluates '
+                               f"combined textures with a stack of {STACK_DEPTH} values)", desc.loc)
 
 
 def _bilerp(desc: TextureDesc, where: str, mapped: TextureSpec, const) -> TextureSpec:

@@ -44,13 +44,14 @@ def test_undeclared_parameters_warn_at_load_time(tmp_path):
     assert s.materials[0].values == {"k": (1.0, 2.0, 3.0)}
 
 
-def test_unknown_and_interface_materials_are_refused_at_load_time(tmp_path):
-    for kind in ("hair", "interface", ""):
-        with pytest.raises(UnsupportedError, match="not supported") as info:
-            load(tmp_path, f'Material "{kind}"\nShape "sphere"\n')
-        assert info.value.loc.line == 4
+def test_unknown_materials_are_refused_at_load_time_and_interface_has_three_names(tmp_path):
+    with pytest.raises(UnsupportedError, match="not supported") as info:
+        load(tmp_path, 'Material "hair"\nShape "sphere"\n')
+    assert info.value.loc.line == 4
     with pytest.raises(UnsupportedError, match="supported: diffuse, dielectric"):
         material("plastic")
+    for kind in ("interface", "none", ""):          # pbrt-v4's parser reads "" and "none" as interface
+        assert load(tmp_path, f'Material "{kind}"\nShape "sphere"\n')[1].materials[0].kind == "interface"
 
 
 def test_python_values_are_validated():

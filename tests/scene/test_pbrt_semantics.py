@@ -68,7 +68,7 @@ def test_material_may_name_a_texture_defined_later_but_not_an_undefined_one(tmp_
 
 
 def test_every_unsupported_thing_is_reported_at_load_in_one_error(tmp_path):
-    path = write(tmp_path, HEAD + 'Texture "w" "float" "wrinkled"\n'
+    path = write(tmp_path, HEAD + 'Texture "w" "float" "ptex"\n'
                                   'MakeNamedMaterial "c" "string type" "measured"\n'
                                   'NamedMaterial "c"\nShape "curve"\nShape "sphere"\n'
                                   'Material "diffuse" "texture reflectance" "w"\nShape "sphere"\n'
@@ -77,7 +77,7 @@ def test_every_unsupported_thing_is_reported_at_load_in_one_error(tmp_path):
     with pytest.raises(SceneErrors) as info:
         load_description(path)
     lines = [e.loc.line for e in info.value.errors]
-    # wrinkled, measured, curve, the undefined texture, goniometric: not the follow-ons of a
+    # ptex, measured, curve, the undefined texture, goniometric: not the follow-ons of a
     # refused texture or named material
     assert lines == [3, 4, 6, 12, 10], [str(e) for e in info.value.errors]
 
@@ -122,17 +122,18 @@ def test_a_corrupt_gzip_file_is_a_located_error(tmp_path, name):
     assert info.value.loc == Location(str(path), 3)
 
 
-def test_mix_inputs_must_be_defined_before_and_one_level_deep(tmp_path):
+def test_mix_inputs_must_be_defined_before_and_nest_at_most_the_stack_deep(tmp_path):
     with pytest.raises(SceneError, match='no texture named "later" is defined before it'):
         load_description(write(tmp_path, HEAD + 'Texture "m" "float" "mix" "texture tex1" "later"\n'
                                                 'Texture "later" "float" "constant"\n'))
-    path = write(tmp_path, HEAD + 'Texture "a" "float" "constant" "float value" 0.2\n'
-                                  'Texture "m" "float" "mix" "texture tex1" "a"\n'
-                                  'Texture "s" "float" "scale" "texture tex" "m" "float scale" 2\n'
-                                  'Texture "mm" "float" "directionmix" "texture tex2" "s"\n')
-    with pytest.raises(SceneError, match='input "s" is itself a mix') as info:
+    chain = ['Texture "t0" "float" "constant" "float value" 0.2\n']
+    chain += [f'Texture "t{i}" "float" "mix" "float tex1" 0.5 "texture tex2" "t{i - 1}"\n' for i in range(1, 7)]
+    # a mix holds its tex1 while tex2 is evaluated, then both and the amount: t_i holds i + 2 values
+    assert "t6" in load_description(write(tmp_path, HEAD + "".join(chain))).textures
+    path = write(tmp_path, HEAD + "".join(chain) + 'Texture "t7" "float" "mix" "float tex1" 0.5 "texture tex2" "t6"\n')
+    with pytest.raises(SceneError, match='"t7": its inputs nest too deeply') as info:
         load_description(path)
-    assert info.value.loc == Location(str(path), 6)
+    assert info.value.loc == Location(str(path), 10)
 
 
 def test_float_and_spectrum_textures_have_separate_name_spaces(tmp_path):

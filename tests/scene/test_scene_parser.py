@@ -271,10 +271,12 @@ def test_defaults_without_options(tmp_path):
     (HEAD + 'Texture "t" "float" "constant"\nTexture "t" "float" "constant"', 4, "defined twice"),
     (HEAD + 'Rotate 10 0 0 0', 3, "zero length"),
     (HEAD + 'Texture "t" "float" "bogus"', 3, 'unknown texture class "bogus"'),
-    (HEAD + 'Texture "t" "float" "wrinkled"', 3, 'class "wrinkled" is not supported'),
+    (HEAD + 'Texture "t" "float" "ptex"', 3, 'class "ptex" is not supported'),
+    (HEAD + 'Texture "t" "spectrum" "wrinkled"', 3, 'has "wrinkled" as a float texture only'),
+    (HEAD + 'Texture "t" "float" "marble"', 3, 'has "marble" as a spectrum texture only'),
     (HEAD + 'Texture "t" "spectrum" "imagemap" "string filename" "nope.png"', 3, "texture image not found"),
     (HEAD + 'Texture "t" "spectrum" "imagemap"', 3, 'needs "string filename"'),
-    (HEAD + 'Texture "t" "float" "checkerboard" "integer dimension" 3', 3, "only 2D"),
+    (HEAD + 'Texture "t" "float" "checkerboard" "integer dimension" 4', 3, '"dimension" must be 2 or 3'),
     (HEAD + 'Texture "t" "float" "checkerboard"\n  "string mapping" "bogus"', 4, 'unknown mapping "bogus"'),
     (HEAD + 'Texture "t" "float" "checkerboard" "rgb tex1" [1 0 0]', 3, '"tex1" must be of type float'),
     (HEAD + 'Texture "t" "float" "scale" "texture tex" "nope"', 3, 'no texture named "nope"'),
@@ -288,7 +290,7 @@ def test_unsupported_things_and_unused_parameters_warn_with_location(tmp_path):
                        'Sampler "stratified" "integer xsamples" 2 "integer ysamples" 3\n'
                        'Integrator "bdpt" "integer maxdepth" 3\nPixelFilter "gaussian"\nColorSpace "aces2065-1"\n'
                        'MakeNamedMedium "fog" "string type" "homogeneous"\nMediumInterface "" ""\n'
-                       'WorldBegin\nShape "sphere" "float radius" 2 "float alpha" 0.5\n'
+                       'WorldBegin\nShape "sphere" "float radius" 2 "float emission" 0.5\n'
                        'Attribute "shape" "float radius" 3\n')
     f = tmp_path / "scene.pbrt"
     assert s.warnings == [
@@ -297,7 +299,7 @@ def test_unsupported_things_and_unused_parameters_warn_with_location(tmp_path):
         f'{f}:3: Integrator "bdpt": rendered with the "path" integrator',
         f"{f}:5: ColorSpace: colours are always linear sRGB",
         f"{f}:6: MakeNamedMedium: {UNSUPPORTED[('MakeNamedMedium', '*')][1]}",
-        f'{f}:9: Shape "sphere": parameter "float alpha" is not supported and was ignored',
+        f'{f}:9: Shape "sphere": parameter "float emission" is not supported and was ignored',
         f"{f}:10: Attribute: default parameters set by Attribute are ignored",
         f"{f}: scene has no lights: the image will be black",
     ]

@@ -1,9 +1,6 @@
-"""Textures on the device: one table of records (constant, image, checkerboard) and one pool of
-image pixels. Every material parameter is a texture id, so constants and maps share one path.
-Image and checkerboard records map the hit to texture coordinates with pbrt-v4's 2D mappings:
-the surface's uv, or spherical/cylindrical/planar from the world-space point. pbrt's mix,
-directionmix and scale-of-two-textures combine up to three other records; those inputs must be
-plain records (constant, image, checkerboard), as Warp functions cannot recurse."""
+"""The host side of the texture table: scene textures become device records (see
+:mod:`renderer.textures.evaluate`), memoised by name, with every combination's postfix program
+built at upload."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -15,111 +12,14 @@ import warp as wp
 from renderer.errors import SceneError
 from renderer.scene.description import TextureDesc, find_texture
 from renderer.scene.texture_params import MAPPINGS, WRAP, read_texture
+from renderer.textures.evaluate import (ARITY, CHECKER_2D, CHECKER_3D, CHECKERBOARD, CONSTANT, DIRECTION_MIX, DOTS,
+                                        FBM, IMAGE, MARBLE, MIX, PRODUCT, SELECT, UV, WINDY, WRINKLED,
+                                        Textures)
+from renderer.textures.noise import permutation
 
-CONSTANT = 0
-IMAGE = 1
-CHECKERBOARD = 2
-MIX = 3
-DIRECTION_MIX = 4
-PRODUCT = 5
-UV, SPHERICAL, CYLINDRICAL, PLANAR = (MAPPINGS[k] for k in ("uv", "spherical", "cylindrical", "planar"))
-
-
-@wp.struct
-class Textures:
-    kind: wp.array(dtype=int)
-    scale: wp.array(dtype=wp.vec3)      # constant value, or multiplier of an image / checker tex1
-    alt: wp.array(dtype=wp.vec3)        # checkerboard tex2; directionmix: the world direction
-    inputs: wp.array(dtype=wp.vec3i)    # mix (tex1, tex2, amount), directionmix (tex1, tex2), product (a, b)
-    uvmap: wp.array(dtype=wp.vec4)      # (su, sv, du, dv): st = (su u + du, sv v + dv)
-    mapping: wp.array(dtype=int)        # UV, SPHERICAL, CYLINDRICAL or PLANAR
-    xform: wp.array(dtype=wp.mat44)     # texture-from-world (planar: rows v1, v2 folded in)
-    image: wp.array(dtype=wp.vec4i)     # (pixel offset, width, height, wrap mode)
-    pixels: wp.array(dtype=wp.vec3)
-
-
-@wp.func
-def _texel(T: Textures, img: wp.vec4i, x: int, y: int) -> wp.vec3:
-    w = img[1]
-    h = img[2]
-    if img[3] == 0:
-        x = ((x % w) + w) % w
-        y = ((y % h) + h) % h
-    elif img[3] == 1:
-        x = wp.clamp(x, 0, w - 1)
-        y = wp.clamp(y, 0, h - 1)
-    elif x < 0 or y < 0 or x >= w or y >= h:
-        return wp.vec3(0.0)
-    return T.pixels[img[0] + y * w + x]
-
-
-@wp.func
-def _bilinear(T: Textures, img: wp.vec4i, st: wp.vec2) -> wp.vec3:
-    """Bilinear lookup; t is flipped as in pbrt-v4 so v = 0 is the image's bottom row."""
-    x = st[0] * float(img[1]) - 0.5
-    y = (1.0 - st[1]) * float(img[2]) - 0.5
-    x0 = wp.floor(x)
-    y0 = wp.floor(y)
-    fx = x - x0
-    fy = y - y0
-    ix = int(x0)
-    iy = int(y0)
-    a = _texel(T, img, ix, iy) * (1.0 - fx) + _texel(T, img, ix + 1, iy) * fx
-    b = _texel(T, img, ix, iy + 1) * (1.0 - fx) + _texel(T, img, ix + 1, iy + 1) * fx
-    return a * (1.0 - fy) + b * fy
-
-
-@wp.func
-def _coordinates(T: Textures, tid: int, uv: wp.vec2, p: wp.vec3) -> wp.vec2:
-    """pbrt-v4's TextureMapping2D: (s, t) from the surface's uv or its world-space point."""
-    m = T.uvmap[tid]
-    mapping = T.mapping[tid]
-    if mapping == UV:
-        return wp.vec2(uv[0] * m[0] + m[2], uv[1] * m[1] + m[3])
-    q = wp.transform_point(T.xform[tid], p)
-    if mapping == SPHERICAL:
-        v = wp.normalize(q)
-        phi = wp.atan2(v[1], v[0])
-        if phi < 0.0:
-            phi = phi + 2.0 * wp.pi
-        return wp.vec2(wp.acos(wp.clamp(v[2], -1.0, 1.0)) / wp.pi, phi / (2.0 * wp.pi))
-    if mapping == CYLINDRICAL:
-        return wp.vec2((wp.pi + wp.atan2(q[1], q[0])) / (2.0 * wp.pi), q[2])
-    return wp.vec2(q[0] + m[2], q[1] + m[3])
-
-
-@wp.func
-def texture_eval(T: Textures, tid: int, uv: wp.vec2, p: wp.vec3, n: wp.vec3) -> wp.vec3:
-    """The texture's value at surface coordinates uv, world point p and geometric normal n (float
-    textures use the first channel)."""
-    k = T.kind[tid]
-    if k < MIX:
-        return _plain(T, tid, uv, p)
-    c = T.inputs[tid]
-    a = _plain(T, c[0], uv, p)
-    b = _plain(T, c[1], uv, p)
-    if k == PRODUCT:
-        return wp.cw_mul(T.scale[tid], wp.cw_mul(a, b))
-    if k == MIX:
-        t = _plain(T, c[2], uv, p)[0]
-        return wp.cw_mul(T.scale[tid], a * (1.0 - t) + b * t)
-    t = wp.abs(wp.dot(n, T.alt[tid]))
-    return wp.cw_mul(T.scale[tid], a * t + b * (1.0 - t))
-
-
-@wp.func
-def _plain(T: Textures, tid: int, uv: wp.vec2, p: wp.vec3) -> wp.vec3:
-    """A constant, image or checkerboard record's value."""
-    k = T.kind[tid]
-    if k == CONSTANT:
-        return T.scale[tid]
-    st = _coordinates(T, tid, uv, p)
-    if k == CHECKERBOARD:
-        if (int(wp.floor(st[0])) + int(wp.floor(st[1]))) % 2 == 0:
-            return T.scale[tid]
-        return T.alt[tid]
-    return wp.cw_mul(T.scale[tid], _bilinear(T, T.image[tid], st))
-
+NOISE = {"fbm": FBM, "wrinkled": WRINKLED, "windy": WINDY, "marble": MARBLE}
+COMBINED = {"mix": MIX, "directionmix": DIRECTION_MIX, "product": PRODUCT, "select": SELECT}
+PATTERNS = {"checker2d": CHECKER_2D, "checker3d": CHECKER_3D, "dots": DOTS}
 
 @dataclass
 class TextureTable:
@@ -133,6 +33,7 @@ class TextureTable:
     inputs: list[tuple[int, int, int]] = field(default_factory=list)
     xform: list[tuple[float, ...]] = field(default_factory=list)
     image: list[tuple[int, int, int, int]] = field(default_factory=list)
+    proc: list[tuple[float, float, float, float]] = field(default_factory=list)
     pixels: list[np.ndarray] = field(default_factory=list)
     n_pixels: int = 0
     named: dict[tuple[str, str], int] = field(default_factory=dict)
@@ -140,8 +41,9 @@ class TextureTable:
 
     def _add(self, kind: int, scale, alt=(0.0, 0.0, 0.0), uvmap=(1.0, 1.0, 0.0, 0.0), image=(0, 1, 1, 0),
              mapping: int = UV, xform: tuple[float, ...] = tuple(np.eye(4).ravel()),
-             inputs: tuple[int, int, int] = (0, 0, 0)) -> int:
+             inputs: tuple[int, int, int] = (0, 0, 0), proc: tuple[float, ...] = (0.0,) * 4) -> int:
         self.kind.append(kind)
+        self.proc.append(tuple(float(x) for x in proc))
         self.inputs.append(tuple(int(i) for i in inputs))
         self.mapping.append(int(mapping))
         self.xform.append(tuple(float(x) for x in xform))
@@ -200,11 +102,13 @@ class TextureTable:
             tid = self._add(IMAGE, 1.0, uvmap=spec.uvmap, image=(off, 2, 2, WRAP["clamp"]), **self._mapped(spec))
         elif spec.kind == "checkerboard":
             tid = self._add(CHECKERBOARD, spec.value, alt=spec.alt, uvmap=spec.uvmap, **self._mapped(spec))
-        elif spec.kind in ("mix", "directionmix", "product"):
-            kind = {"mix": MIX, "directionmix": DIRECTION_MIX, "product": PRODUCT}[spec.kind]
+        elif spec.kind in NOISE:
+            tid = self._add(NOISE[spec.kind], spec.value, xform=spec.xform, proc=spec.noise)
+        elif spec.kind in COMBINED:
             types = (desc.value_type, desc.value_type, "float")        # a mix's amount is a float texture
             ids = [self._input(v, t, desc, textures) for v, t in zip(spec.inputs, types)]
-            tid = self._add(kind, spec.value, alt=spec.alt, inputs=(*ids, *[0] * (3 - len(ids))))
+            tid = self._add(COMBINED[spec.kind], spec.value, alt=spec.alt, inputs=(*ids, *[0] * (3 - len(ids))),
+                            uvmap=spec.uvmap, proc=(PATTERNS.get(spec.pattern, 0), 0, 0, 0), **self._mapped(spec))
         elif spec.base is None:             # a scale of two constants
             tid = self.add_constant(spec.value)
         else:
@@ -213,14 +117,16 @@ class TextureTable:
         return tid
 
     def _input(self, v, value_type: str, desc: TextureDesc, textures: dict[str, TextureDesc]) -> int:
-        """An input of a mix or product: a constant, or a named texture that is not itself one."""
+        """An input of a combination: a constant, or a named texture (itself combined or not)."""
         if not isinstance(v, str):
             return self.add_constant(v)
-        tid = self.lookup(v, value_type, textures, desc.loc)
-        if self.kind[tid] >= MIX:
-            raise SceneError(f'Texture "{desc.name}": its input "{v}" is itself a mix, directionmix or scale of '
-                             "two textures; one level of these is supported", desc.loc)
-        return tid
+        return self.lookup(v, value_type, textures, desc.loc)
+
+    def _program(self, tid: int) -> list[int]:
+        """The record ids that evaluate ``tid`` in postfix order: its inputs' programs, then itself."""
+        if self.kind[tid] < MIX:
+            return [tid]
+        return [i for c in self.inputs[tid][:ARITY[self.kind[tid]]] for i in self._program(c)] + [tid]
 
     @staticmethod
     def _mapped(spec) -> dict:
@@ -236,6 +142,7 @@ class TextureTable:
         self.mapping.append(self.mapping[base])
         self.xform.append(self.xform[base])
         self.image.append(self.image[base])
+        self.proc.append(self.proc[base])
         return len(self.kind) - 1
 
     def lookup(self, name: str, value_type: str, textures: dict[str, TextureDesc], loc) -> int:
@@ -256,6 +163,15 @@ class TextureTable:
         T.mapping = wp.array(np.asarray(self.mapping or [UV], dtype=np.int32), dtype=int, device=device)
         T.xform = wp.array(pad(self.xform, (n, 4, 4)), dtype=wp.mat44, device=device)
         T.image = wp.array(np.asarray(self.image or [(0, 1, 1, 0)], dtype=np.int32), dtype=wp.vec4i, device=device)
+        T.proc = wp.array(pad(self.proc, (n, 4)), dtype=wp.vec4, device=device)
+        programs = [self._program(t) if k >= MIX else [] for t, k in enumerate(self.kind)]
+        starts = np.cumsum([0] + [len(q) for q in programs])[:-1]
+        prog = [(int(a), len(q)) for a, q in zip(starts, programs)] or [(0, 0)]
+        T.prog = wp.array(np.asarray(prog, dtype=np.int32), dtype=wp.vec2i, device=device)
+        T.program = wp.array(np.asarray([i for q in programs for i in q] or [0], dtype=np.int32), dtype=int,
+                             device=device)
         pix = np.concatenate(self.pixels) if self.pixels else np.zeros((1, 3), np.float32)
         T.pixels = wp.array(pix, dtype=wp.vec3, device=device)
-        return T, [T.kind, T.scale, T.alt, T.inputs, T.uvmap, T.mapping, T.xform, T.image, T.pixels]
+        T.perm = wp.array(permutation(), dtype=int, device=device)
+        return T, [T.kind, T.scale, T.alt, T.inputs, T.uvmap, T.mapping, T.xform, T.image, T.proc, T.prog, T.program,
+                   T.pixels, T.perm]
