@@ -1,6 +1,11 @@
 """pbrt-v4's ``infinite`` light: constant radiance ``L``, or an environment image (square: pbrt-v4's
 equal-area octahedral map; 2:1: latitude-longitude), importance sampled with a piecewise-constant
-2D distribution over the image. ``scale`` multiplies either.
+2D distribution over the image. ``scale`` multiplies either. ``illuminance`` > 0 (lux) rescales it
+as pbrt-v4 does: constant ``L`` by E / π (the illuminance of uniform unit radiance on an upward
+patch; an rgb ``L`` keeps its own magnitude); an image by E / k, where k is pbrt-v4's sum over the
+pixels above the horizon of luminance × cos θ × 2π / pixel count, which is half the map's true
+upward illuminance (so a map ends up twice as bright as a constant ``L`` of the same illuminance,
+as in pbrt-v4). ``portal`` is accepted and ignored, with a warning: sampling stays the map's.
 """
 from __future__ import annotations
 
@@ -10,8 +15,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import warp as wp
 
-from renderer.errors import Location, MissingFileError, SceneError
-from renderer.io.images import read_image
+from renderer.color.rgb import luminance
+from renderer.errors import Location, SceneError
+from renderer.lights.images import read_light_image, resolved, rgb_of
 from renderer.lights.sample import LightEval, LightSample
 from renderer.lights.table import LightEntry, Lights, Row, colour_parameters, scaled_colour
 from renderer.parameters import Parameter, Parameters
@@ -28,7 +34,11 @@ DIRECTIVE = "LightSource"
 PARAMS = Parameters(
     *colour_parameters("L", "constant radiance (not with filename)"),
     Parameter("filename", "string", doc="environment image: square = equal-area, 2:1 = lat-long"),
+    Parameter("illuminance", "float", -1.0, doc="if > 0, the illuminance (lux) on an upward patch (pbrt-v4)"),
 )
+#: pbrt-v4 parameters read but not honoured, with the reason the unused-parameter warning gives.
+IGNORED = {"portal": "pbrt-v4's portal sampling is not implemented; the light is sampled over the whole sphere "
+                     "(the same image, noisier where it is seen through a small window)"}
 
 MAP_CONSTANT = 0
 MAP_EQUAL_AREA = 1
@@ -43,17 +53,8 @@ def check(given: dict[str, Any], light_to_world: np.ndarray, loc: Location | Non
     if "filename" in given and "L" in given:
         raise SceneError('LightSource "infinite": give either "L" or "filename", not both', loc)
     if "filename" in given:
-        path = Path(given["filename"])
-        given = {**given, "filename": str(base_dir / path if base_dir is not None else path)}
-        _image_path(given, loc)
+        given = resolved(given, loc, base_dir, "environment image")
     return given
-
-
-def _image_path(values: dict[str, Any], loc: Location | None) -> Path:
-    path = Path(values["filename"])
-    if not path.is_file():
-        raise MissingFileError(path, loc, "environment image")
-    return path
 
 
 def _mapping(image: np.ndarray, loc: Location | None) -> int:
@@ -73,23 +74,39 @@ def distribution_function(rgb: np.ndarray, mapping: int) -> tuple[np.ndarray, np
     return rgb.max(axis=2), weight
 
 
+def pbrt_illuminance(rgb: np.ndarray, mapping: int) -> float:
+    """pbrt-v4's illuminance of a map (ImageInfiniteLight with ``illuminance``): luminance × cos θ
+    over the pixel centres above the horizon (+z of the map's frame), times half a pixel's solid
+    angle (2π / pixel count for the equal-area square, which is what pbrt-v4 computes)."""
+    h, w = rgb.shape[:2]
+    u, v = np.meshgrid((np.arange(w) + 0.5) / w, (np.arange(h) + 0.5) / h)
+    if mapping == MAP_EQUAL_AREA:
+        from renderer.sampling.equal_area import square_to_sphere
+        cos_t = square_to_sphere(np.stack([u, v], -1).reshape(-1, 2))[:, 2].reshape(h, w)
+        half_pixel = 2.0 * np.pi / (w * h)
+    else:                                       # lat-long: a pixel's solid angle varies with its row
+        cos_t = np.cos(np.pi * v)
+        half_pixel = 0.5 * (2.0 * np.pi / w) * (np.pi / h) * np.sin(np.pi * v)
+    up = cos_t > 0
+    return float((luminance(rgb.astype(np.float64))[up] * cos_t[up] * np.broadcast_to(half_pixel, up.shape)[up]).sum())
+
+
 def entry(light: LightDesc, tris: np.ndarray | None) -> LightEntry:
     """The row: mapping and size, the light frame, and the pixels and CDFs in the pools."""
     v = light.values
     R = np.asarray(light.light_to_world, dtype=np.float64)[:3, :3]
-    e = LightEntry(L=scaled_colour(v, "L"), ints={"mapping": MAP_CONSTANT, "width": 1, "height": 1},
+    E = v["illuminance"]
+    e = LightEntry(L=scaled_colour(v, "L", E / np.pi if E > 0 else 1.0),
+                   ints={"mapping": MAP_CONSTANT, "width": 1, "height": 1},
                    to_world=R, to_light=np.linalg.inv(R), escapes=True)
     if v["filename"] is None:
         return e
-    try:
-        image = read_image(_image_path(v, light.loc), srgb=True)
-    except OSError as e:
-        raise SceneError(f"environment image: {e}", light.loc) from e
+    image = read_light_image(v, light.loc, "environment image")
     mapping = _mapping(image, light.loc)
-    rgb = image[..., :3] if image.shape[2] >= 3 else np.repeat(image[..., :1], 3, axis=2)
-    if not np.all(np.isfinite(rgb)) or np.any(rgb < 0):
-        raise SceneError("environment image contains negative, NaN or infinite values", light.loc)
-    rgb = np.ascontiguousarray(rgb, dtype=np.float32)
+    rgb = np.ascontiguousarray(rgb_of(image))
+    if E > 0:
+        k = pbrt_illuminance(rgb, mapping)
+        e.L = scaled_colour(v, "L", E / k if k > 0 else 0.0)
     h, w = rgb.shape[:2]
     cond, marg, _ = distribution_2d(*distribution_function(rgb, mapping))
     e.ints = {"mapping": mapping, "width": w, "height": h}
