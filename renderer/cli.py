@@ -335,6 +335,11 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
             _check_writable(path, what)
     if args.ray is None and (args.ray_chunk or args.ray_workers):
         raise RenderError("--ray-chunk and --ray-workers need --ray")
+    display = None
+    if args.display_server:             # before the upload, so a wrong address fails at once
+        from renderer.io.display import DisplayServer
+
+        display = DisplayServer(args.display_server, out.name, x1 - x0, y1 - y0)
     if args.ray is not None:
         from renderer.cluster import Cluster, open_cluster
 
@@ -348,11 +353,6 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
     phases["Kernel load"] = session.stats.compile_seconds
     for w in session.stats.warnings:
         print(f"warning: {w}", file=sys.stderr)
-    display = None
-    if args.display_server:
-        from renderer.io.display import DisplayServer
-
-        display = DisplayServer(args.display_server, out.name, x1 - x0, y1 - y0)
     passes = [0]
     if args.resume:
         print(f"render: resumed {args.resume} at {session.film.spp} spp", file=sys.stderr)
