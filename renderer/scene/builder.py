@@ -30,6 +30,7 @@ from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, PBRT_V3_NAMES, UNS
 from renderer.scene.texture_params import check_inputs, read_texture
 from renderer.sampling.sampler_spec import DEFAULT_SAMPLER, RANDOMIZATIONS
 from renderer.settings import sampler_spec
+from renderer.scene.upgrade import upgraded
 from renderer.scene.transform import (check_single_precision, from_pbrt_matrix, inverse, look_at,
                                       read_instance_transforms, rotate, scale, swaps_handedness, transformed_mesh,
                                       translate)
@@ -82,6 +83,7 @@ class Builder:
         return self.scene
 
     def _directive(self, d: Directive) -> None:
+        d = upgraded(d, self.warn)                     # pbrt-v3 syntax, read as pbrt-v4's --upgrade writes it
         if self.world_begun and d.name in OPTIONS_ONLY:
             raise SceneError(f"{d.name} must come before WorldBegin", d.loc)
         if not self.world_begun and d.name in WORLD_ONLY:
@@ -132,9 +134,8 @@ class Builder:
         """One warning per parameter nobody read; ``why`` adds a plugin's reason for some names."""
         what = f'{d.name} "{d.args[0]}"' if d.args else d.name
         for p in d.params.unused():
-            reason = (why or {}).get(p.name)
-            self.warn(p.loc, f'{what}: parameter "{p.type} {p.name}" is not supported and was ignored'
-                             + (f": {reason}" if reason else ""))
+            reason = f": {why[p.name]}" if why and p.name in why else ""
+            self.warn(p.loc, f'{what}: parameter "{p.type} {p.name}" is not supported and was ignored{reason}')
         self.warn_shadowed(d.params, what)
 
     def warn_shadowed(self, params: ParamSet, what: str) -> None:
