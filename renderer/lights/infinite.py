@@ -5,7 +5,8 @@ as pbrt-v4 does: constant ``L`` by E / π (the illuminance of uniform unit radia
 patch; an rgb ``L`` keeps its own magnitude); an image by E / k, where k is pbrt-v4's sum over the
 pixels above the horizon of luminance × cos θ × 2π / pixel count, which is half the map's true
 upward illuminance (so a map ends up twice as bright as a constant ``L`` of the same illuminance,
-as in pbrt-v4). ``portal`` is accepted and ignored, with a warning: sampling stays the map's.
+as in pbrt-v4). ``portal`` is accepted and ignored, with a warning: pbrt-v4 shows the map only
+through the portal; here it is seen (and sampled) in every direction.
 """
 from __future__ import annotations
 
@@ -37,8 +38,9 @@ PARAMS = Parameters(
     Parameter("illuminance", "float", -1.0, doc="if > 0, the illuminance (lux) on an upward patch (pbrt-v4)"),
 )
 #: pbrt-v4 parameters read but not honoured, with the reason the unused-parameter warning gives.
-IGNORED = {"portal": "pbrt-v4's portal sampling is not implemented; the light is sampled over the whole sphere "
-                     "(the same image, noisier where it is seen through a small window)"}
+IGNORED = {"portal": "pbrt-v4's portal light is not implemented: pbrt-v4 shows the map only through the portal "
+                     "and samples it there; here it is seen in every direction and sampled over the whole sphere "
+                     "(the same image where the portal is the scene's only opening, noisier)"}
 
 MAP_CONSTANT = 0
 MAP_EQUAL_AREA = 1
