@@ -7,7 +7,7 @@ validation that needs more than one parameter), ``ROW`` (:class:`~renderer.light
 names of its table entries), the host function ``entry(light, tris) -> LightEntry | None`` (an area
 light's also takes the pbrt-v4 shape's exact area, or None for a mesh) and the
 device functions ``sample(lights, i, p, u) -> LightSample`` and, where a path can reach the light,
-``escaped(lights, i, d) -> LightEval`` (rays leaving the scene) or ``emitted(lights, i, p_ref, p,
+``escaped(lights, i, p, d) -> LightEval`` (rays leaving the scene from p) or ``emitted(lights, i, p_ref, p,
 n, w_out) -> LightEval`` (rays hitting an emissive surface). Kernels are specialised to the kinds
 a scene uses and call them through ``wp.static``, so the integrator names no kind of light.
 """

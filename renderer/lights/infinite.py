@@ -5,8 +5,8 @@ as pbrt-v4 does: constant ``L`` by E / π (the illuminance of uniform unit radia
 patch; an rgb ``L`` keeps its own magnitude); an image by E / k, where k is pbrt-v4's sum over the
 pixels above the horizon of luminance × cos θ × 2π / pixel count, which is half the map's true
 upward illuminance (so a map ends up twice as bright as a constant ``L`` of the same illuminance,
-as in pbrt-v4). ``portal`` is accepted and ignored, with a warning: pbrt-v4 shows the map only
-through the portal; here it is seen (and sampled) in every direction.
+as in pbrt-v4). ``portal`` (four corners of a rectangle, world space) makes it pbrt-v4's portal
+light: the map (or a constant ``L``) is seen, and sampled, only through that window (portal.py).
 """
 from __future__ import annotations
 
@@ -18,6 +18,7 @@ import warp as wp
 
 from renderer.color.rgb import luminance
 from renderer.errors import Location, SceneError
+from renderer.lights import portal
 from renderer.lights.images import read_light_image, resolved, rgb_of
 from renderer.lights.sample import LightEval, LightSample
 from renderer.lights.table import LightEntry, Lights, Row, colour_parameters, scaled_colour
@@ -36,15 +37,13 @@ PARAMS = Parameters(
     *colour_parameters("L", "constant radiance (not with filename)"),
     Parameter("filename", "string", doc="environment image: square = equal-area, 2:1 = lat-long"),
     Parameter("illuminance", "float", -1.0, doc="if > 0, the illuminance (lux) on an upward patch (pbrt-v4)"),
+    Parameter("portal", "points3", doc="4 world-space corners of a rectangle: light enters only through it (pbrt-v4)"),
 )
-#: pbrt-v4 parameters read but not honoured, with the reason the unused-parameter warning gives.
-IGNORED = {"portal": "pbrt-v4's portal light is not implemented: pbrt-v4 shows the map only through the portal "
-                     "and samples it there; here it is seen in every direction and sampled over the whole sphere "
-                     "(the same image where the portal is the scene's only opening, noisier)"}
 
 MAP_CONSTANT = 0
 MAP_EQUAL_AREA = 1
 MAP_LATLONG = 2
+MAP_PORTAL = 3                  # an equal-area map (or L) rectified over a portal's directions
 ROW = Row(ints=("mapping", "width", "height"))
 K = ROW.K
 
@@ -56,6 +55,10 @@ def check(given: dict[str, Any], light_to_world: np.ndarray, loc: Location | Non
         raise SceneError('LightSource "infinite": give either "L" or "filename", not both', loc)
     if "filename" in given:
         given = resolved(given, loc, base_dir, "environment image")
+    if "portal" in given:
+        if len(given["portal"]) != 12:
+            raise SceneError(f'LightSource "infinite": "portal" needs 4 points, got {len(given["portal"]) / 3:g}', loc)
+        portal.frame(np.asarray(given["portal"]), loc)
     return given
 
 
@@ -101,19 +104,39 @@ def entry(light: LightDesc, tris: np.ndarray | None) -> LightEntry:
     e = LightEntry(L=scaled_colour(v, "L", E / np.pi if E > 0 else 1.0),
                    ints={"mapping": MAP_CONSTANT, "width": 1, "height": 1},
                    to_world=R, to_light=np.linalg.inv(R), escapes=True)
-    if v["filename"] is None:
+    if v["filename"] is None and v["portal"] is None:
         return e
-    image = read_light_image(v, light.loc, "environment image")
-    mapping = _mapping(image, light.loc)
-    rgb = np.ascontiguousarray(rgb_of(image))
-    if E > 0:
-        k = pbrt_illuminance(rgb, mapping)
-        e.L = scaled_colour(v, "L", E / k if k > 0 else 0.0)
+    if v["filename"] is None:       # L through a portal: pbrt-v4 makes a 1x1 map of it
+        rgb, mapping = np.asarray(v["L"], np.float32).reshape(1, 1, 3), MAP_EQUAL_AREA
+    else:
+        image = read_light_image(v, light.loc, "environment image")
+        mapping = _mapping(image, light.loc)
+        rgb = np.ascontiguousarray(rgb_of(image))
+    k = pbrt_illuminance(rgb, mapping) if E > 0 else 1.0
+    factor = (E / k if k > 0 else 0.0) if E > 0 else 1.0
+    e.L = np.full(3, v["scale"] * factor)
+    if v["portal"] is not None:
+        return _portal_entry(e, rgb, mapping, np.asarray(v["portal"]).reshape(4, 3), light.loc)
     h, w = rgb.shape[:2]
     cond, marg, _ = distribution_2d(*distribution_function(rgb, mapping))
     e.ints = {"mapping": mapping, "width": w, "height": h}
     e.f_data = np.concatenate([cond.ravel(), marg])    # (h, w + 1) conditional CDFs, then the marginal
     e.v_data = rgb.reshape(-1, 3)
+    return e
+
+
+def _portal_entry(e: LightEntry, rgb: np.ndarray, mapping: int, corners: np.ndarray,
+                  loc: Location | None) -> LightEntry:
+    """The portal light's row: the rectified image and two opposite corners in the vector pool,
+    the portal's frame as the light frame."""
+    if mapping != MAP_EQUAL_AREA:
+        raise SceneError('LightSource "infinite": a "portal" needs a square equal-area map (as pbrt-v4)', loc)
+    f = portal.frame(corners, loc)
+    n = rgb.shape[0]
+    rect = portal.rectified(rgb, e.to_light, f)
+    e.ints = {"mapping": MAP_PORTAL, "width": n, "height": n}
+    e.to_world, e.to_light = f.T, f
+    e.v_data = np.concatenate([rect.reshape(-1, 3), corners[[0, 2]]]).astype(np.float32)
     return e
 
 
@@ -179,7 +202,9 @@ def pdf(lights: Lights, i: int, d: wp.vec3) -> float:
 
 
 @wp.func
-def escaped(lights: Lights, i: int, d: wp.vec3) -> LightEval:
+def escaped(lights: Lights, i: int, p: wp.vec3, d: wp.vec3) -> LightEval:
+    if lights.k[i, K.mapping] == MAP_PORTAL:
+        return portal.escaped(lights, i, lights.k[i, K.width], p, d)
     e = LightEval()
     e.L = radiance(lights, i, d)
     e.pdf = pdf(lights, i, d)
@@ -192,6 +217,8 @@ def sample(lights: Lights, i: int, p: wp.vec3, u: wp.vec2) -> LightSample:
     s.delta = False
     s.dist = 1.0e30
     mapping = lights.k[i, K.mapping]
+    if mapping == MAP_PORTAL:
+        return portal.sample(lights, i, lights.k[i, K.width], p, u)
     if mapping == MAP_CONSTANT:
         # the constant sky has no preferred direction
         s.wi = uniform_sphere(u)

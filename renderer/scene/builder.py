@@ -130,12 +130,10 @@ class Builder:
             raise UnsupportedError(f'unknown {d.name} "{name}" (pbrt-v4 knows {known})', d.loc)
         return name
 
-    def warn_unused(self, d: Directive, why: dict[str, str] | None = None) -> None:
-        """One warning per parameter nobody read; ``why`` adds a plugin's reason for some names."""
+    def warn_unused(self, d: Directive) -> None:
         what = f'{d.name} "{d.args[0]}"' if d.args else d.name
         for p in d.params.unused():
-            reason = f": {why[p.name]}" if why and p.name in why else ""
-            self.warn(p.loc, f'{what}: parameter "{p.type} {p.name}" is not supported and was ignored{reason}')
+            self.warn(p.loc, f'{what}: parameter "{p.type} {p.name}" is not supported and was ignored')
         self.warn_shadowed(d.params, what)
 
     def warn_shadowed(self, params: ParamSet, what: str) -> None:
@@ -357,7 +355,7 @@ class Builder:
     def LightSource(self, d: Directive) -> None:
         inverse(self.state.ctm, d.name, d.loc)
         self.scene.lights.append(lights.describe(d.name, str(d.args[0]), d.params, self.state.ctm, d.loc))
-        self.warn_unused(d, getattr(lights.REGISTRY[str(d.args[0])], "IGNORED", None))
+        self.warn_unused(d)
 
     # -- shapes and objects
 

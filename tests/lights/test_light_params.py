@@ -50,7 +50,7 @@ def test_infinite_light_defaults_and_image(tmp_path):
     s = load(tmp_path, HEAD + 'LightSource "infinite"\nLightSource "infinite" "string filename" "sky.exr" '
                               '"float scale" 3 "float illuminance" 5\n')
     a, b = s.lights
-    assert a.values == {"L": (1.0, 1.0, 1.0), "filename": None, "scale": 1.0, "illuminance": -1.0}
+    assert a.values == {"L": (1.0, 1.0, 1.0), "filename": None, "scale": 1.0, "illuminance": -1.0, "portal": None}
     assert b.values["filename"] == str(tmp_path / "sky.exr") and b.values["scale"] == 3.0
     assert b.values["illuminance"] == 5.0 and s.warnings == []
     error_at(tmp_path, HEAD + 'LightSource "infinite" "string filename" "gone.exr"', 3, "not found",

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from pbrt_compare import DATA, DISTINCT, assert_matches_pbrt, variant_chi
+from renderer.api import load_scene, render
 from renderer.errors import SceneError
 from renderer.lights import goniometric, infinite, projection
 from renderer.scene import load_description
@@ -84,10 +85,40 @@ def test_image_lights_need_a_filename(tmp_path, kind):
     assert info.value.loc.line == 3
 
 
-def test_portal_is_reported_as_ignored_with_its_reason(tmp_path):
+def test_portal_light_matches_pbrt(tmp_path):
+    """A room lit through a window that a portal covers, and a skylight it does not: as in pbrt-v4
+    the map is seen only through the portal. Without the portal, light enters by the skylight too
+    (and the window's light is sampled over the whole sphere): no longer a match."""
+    ref, ref_var = assert_matches_pbrt("light_portal")
+    no_portal = [('    "point3 portal" [-0.8 1 2  -0.8 2.2 2  0.8 2.2 2  0.8 1 2]\n', "")]
+    assert variant_chi("light_portal", no_portal, ref, ref_var, tmp_path, ("light_environment_image.png",)) > DISTINCT
+
+
+def test_portal_irradiance_under_a_window_is_the_closed_form(tmp_path):
+    """A white Lambertian floor 1 below a 1 x 1 portal of constant L = 1 (pbrt-v4's 1x1 map of L),
+    seen straight down near the window's centre, direct light only: the floor's radiance is E/π
+    with E the closed-form irradiance of a rectangle above a point, 2 [A/√(1+A²) atan(B/√(1+A²))
+    + B/√(1+B²) atan(A/√(1+B²))] for half-sides A = B = 0.5. Light and BSDF samples both count
+    (the window is found by both), so a wrong density or bounds shows here."""
+    path = tmp_path / "window.pbrt"
+    path.write_text('LookAt 0 0.5 0  0 0 0  0 0 1\n'
+                    'Camera "orthographic" "float screenwindow" [-0.03 0.03 -0.03 0.03]\n'
+                    'Sampler "independent"\nIntegrator "path" "integer maxdepth" 1\n'
+                    'Film "rgb" "integer xresolution" 8 "integer yresolution" 8 "string filename" "w.exr"\n'
+                    'WorldBegin\nLightSource "infinite" "rgb L" [1 1 1]\n'
+                    '    "point3 portal" [-0.5 1 -0.5  0.5 1 -0.5  0.5 1 0.5  -0.5 1 0.5]\n'
+                    'Material "diffuse" "rgb reflectance" [1 1 1]\n'
+                    'Shape "trianglemesh" "point3 P" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] "integer indices" [0 2 1 0 3 2]\n')
+    img = render(load_scene(path), spp=256, seed=4)
+    A = B = 0.5
+    E = 2 * (A / math.hypot(1, A) * math.atan(B / math.hypot(1, A)) + B / math.hypot(1, B) * math.atan(A / math.hypot(1, B)))
+    assert img.mean() == pytest.approx(E / math.pi, rel=0.01)
+
+
+def test_portal_must_be_a_rectangle(tmp_path):
     path = tmp_path / "scene.pbrt"
     path.write_text('Camera "perspective"\nWorldBegin\n'
-                    'LightSource "infinite" "point3 portal" [0 0 0  1 0 0  1 1 0  0 1 0]\n')
-    (w,) = load_description(path).warnings
-    assert w.startswith(f'{path}:3: LightSource "infinite": parameter "point3 portal" is not supported and was ignored')
-    assert "portal sampling is not implemented" in w
+                    'LightSource "infinite" "point3 portal" [0 0 0  1 0 0  1 1.5 0  0 1 0]\n')
+    with pytest.raises(SceneError, match="corners of a rectangle") as info:
+        load_description(path)
+    assert info.value.loc.line == 3
