@@ -23,7 +23,7 @@ $(BIN)/python:
 
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	$(BIN)/pip install --upgrade pip >/dev/null
-	$(BIN)/pip install -e '.[test,denoise,cluster]'
+	$(BIN)/pip install -e '.[test,denoise,cluster,tev]'
 	touch $@
 
 install: $(VENV)/.installed

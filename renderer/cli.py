@@ -143,6 +143,10 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--ray-workers", type=_positive, metavar="N", help="tasks in flight (default: one per CPU, "
                    "or per GPU with --device cuda; --threads sets each task's CPUs)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.add_argument("--stats", action="store_true", help="as pbrt-v4: print statistics at the end (scene, rays, "
+                   "memory, time per phase)")
+    p.add_argument("--display-server", metavar="HOST:PORT", help="as pbrt-v4: show each pass in the tev viewer "
+                   "(pip install '.[tev]')")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     return p
 
@@ -299,7 +303,9 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
     for what, path in (("reference image", args.reference), ("checkpoint", args.resume)):
         if path is not None and not path.is_file():
             raise RenderError(f"{what} not found: {path}")
+    clock0 = time.perf_counter()
     scene = load_scene(args.scene)
+    phases = {"Scene parsing and building": time.perf_counter() - clock0}
     out = args.output or Path(scene.film.filename)
     if out.suffix.lower() not in (".exr", ".png"):
         source = "" if args.output else " (the scene's Film \"filename\"; choose another with -o)"
@@ -329,6 +335,11 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
             _check_writable(path, what)
     if args.ray is None and (args.ray_chunk or args.ray_workers):
         raise RenderError("--ray-chunk and --ray-workers need --ray")
+    display = None
+    if args.display_server:             # before the upload, so a wrong address fails at once
+        from renderer.io.display import DisplayServer
+
+        display = DisplayServer(args.display_server, out.name, x1 - x0, y1 - y0)
     if args.ray is not None:
         from renderer.cluster import Cluster, open_cluster
 
@@ -337,8 +348,12 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
     else:
         session = open_session(scene, settings, device=args.device, threads=args.threads, resume=args.resume,
                                memory_limit_gb=args.memory_limit)
+    phases["Upload (Warp start, geometry, textures, lights)"] = time.perf_counter() - clock0 - sum(phases.values()) \
+        - session.stats.compile_seconds
+    phases["Kernel load"] = session.stats.compile_seconds
     for w in session.stats.warnings:
         print(f"warning: {w}", file=sys.stderr)
+    passes = [0]
     if args.resume:
         print(f"render: resumed {args.resume} at {session.film.spp} spp", file=sys.stderr)
     spp = scene.sampler.spp if args.spp is None else args.spp
@@ -348,6 +363,9 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
 
     def on_pass(s: RenderSession) -> None:
         prog(s.film.spp, f"{s.busy} tasks busy" if args.ray is not None else "")
+        passes[0] += 1
+        if display is not None:
+            display.show(s.image())
         now = time.perf_counter()
         if args.checkpoint and now - clock["checkpoint"] >= args.checkpoint_every:
             save_checkpoint(args.checkpoint, s.state())
@@ -378,6 +396,9 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
     finally:
         stop.phase = "finish"
         prog.close()
+        if display is not None:
+            display.close()
+    clock0 = time.perf_counter()
     img = session.image()
     layers: dict = {}
     if args.aov or args.denoise:
@@ -400,6 +421,12 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
           file=sys.stderr)
     for line in session.summary() if args.ray is not None else ():
         print(f"render: {line}", file=sys.stderr)
+    if args.stats:
+        from renderer.io.statistics import report
+
+        phases["Rendering"] = stats.seconds
+        phases["Image output"] = time.perf_counter() - clock0
+        print(report(scene, settings, session, phases, passes[0]))           # stdout, as pbrt-v4
     if stats.spp < spp:
         limited = "time limit" if args.time_limit is not None else "interrupt"
         why = signal.Signals(stop.signum).name if stop.signum else limited

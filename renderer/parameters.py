@@ -22,9 +22,10 @@ if TYPE_CHECKING:   # only annotations: importing the scene package here would m
 
 #: Parameter types: "float" and "rgb" may be textures and get a device slot; "bool" gets a flag
 #: bit; "int", "string", "strings" (a list of names, e.g. a mix's materials), "point3" (a position,
-#: e.g. a light's "from") and "floats" (a list of any length, e.g. a stack's per-layer values) are
-#: host-side only (they shape the table, not the per-hit value).
-TYPES = ("float", "rgb", "bool", "int", "string", "strings", "point3", "floats")
+#: e.g. a light's "from"), "floats" (a list of any length, e.g. a stack's per-layer values) and
+#: "points3" (a list of points: a portal's corners) are host-side only (they shape the table, not
+#: the per-hit value).
+TYPES = ("float", "rgb", "bool", "int", "string", "strings", "point3", "floats", "points3")
 
 
 @dataclass(frozen=True)
@@ -80,6 +81,10 @@ class Parameter:
             if a.size == 0:
                 raise SceneError(f'{owner}: parameter "{self.name}" needs at least one value', loc)
             a = a.ravel()
+        elif self.type == "points3":
+            if a.size == 0 or a.size % 3:
+                raise SceneError(f'{owner}: parameter "{self.name}" needs points (3 values each), got {a.size} values', loc)
+            a = a.ravel()
         elif self.type == "point3":
             if a.size != 3:
                 raise SceneError(f'{owner}: parameter "{self.name}" needs 3 values (one point), got {a.size}', loc)
@@ -96,7 +101,7 @@ class Parameter:
             if float(a.ravel()[0]) != math.floor(float(a.ravel()[0])):
                 raise SceneError(f'{owner}: parameter "{self.name}" must be an integer, got {value!r}', loc)
             return int(a.ravel()[0])
-        return tuple(float(x) for x in a) if self.type in ("rgb", "point3", "floats") else float(a.ravel()[0])
+        return tuple(float(x) for x in a) if self.type in ("rgb", "point3", "floats", "points3") else float(a.ravel()[0])
 
     def read(self, ps: ParamSet, owner: str) -> Any:
         """This parameter's value from a pbrt parameter list, or None when it is absent."""
@@ -116,7 +121,7 @@ class Parameter:
             v = ps.bool(self.name)
         elif self.type == "int":
             v = ps.int(self.name)
-        elif self.type == "point3":
+        elif self.type in ("point3", "points3"):
             v = ps.floats(self.name, ("point3", "point"))
         elif self.type == "floats":
             v = ps.floats(self.name)

@@ -99,7 +99,7 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
                 for j in range(wp.static(len(seen))):
                     for i in range(n_lights):
                         if scene.lights.kind[i] == wp.static(seen_ids[j]):
-                            e = wp.static(seen[j].escaped)(scene.lights, i, d)
+                            e = wp.static(seen[j].escaped)(scene.lights, i, o, d)
                             if max3(e.L) > 0.0:
                                 L = L + _emission(beta, e, sel, prev_pdf, prev_specular, wp.static(nee))
                 break

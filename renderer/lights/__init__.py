@@ -4,9 +4,10 @@ A light module has ``NAME`` (its pbrt-v4 type name), ``DIRECTIVE`` (``"LightSour
 ``"AreaLightSource"`` for lights that shapes carry), ``PARAMS`` (its named parameters, pbrt-v4's
 names and defaults), optionally ``check(given, light_to_world, loc, base_dir) -> given`` (load-time
 validation that needs more than one parameter), ``ROW`` (:class:`~renderer.lights.table.Row`, the
-names of its table entries), the host function ``entry(light, tris) -> LightEntry | None`` and the
+names of its table entries), the host function ``entry(light, tris) -> LightEntry | None`` (an area
+light's also takes the pbrt-v4 shape's exact area, or None for a mesh) and the
 device functions ``sample(lights, i, p, u) -> LightSample`` and, where a path can reach the light,
-``escaped(lights, i, d) -> LightEval`` (rays leaving the scene) or ``emitted(lights, i, p_ref, p,
+``escaped(lights, i, p, d) -> LightEval`` (rays leaving the scene from p) or ``emitted(lights, i, p_ref, p,
 n, w_out) -> LightEval`` (rays hitting an emissive surface). Kernels are specialised to the kinds
 a scene uses and call them through ``wp.static``, so the integrator names no kind of light.
 """
@@ -20,9 +21,9 @@ from typing import Any
 import numpy as np
 
 from renderer.errors import Location, SceneError, UnsupportedError
-from renderer.lights import area, distant, infinite, point, spot
+from renderer.lights import area, distant, goniometric, infinite, point, projection, spot
 from renderer.lights.table import LightTable
-from renderer.scene.description import LightDesc, SceneDescription
+from renderer.scene.description import LightDesc, MeshDesc, SceneDescription
 from renderer.scene.params import ParamSet
 
 REGISTRY: dict[str, ModuleType] = {m.NAME: m for m in (
@@ -31,6 +32,8 @@ REGISTRY: dict[str, ModuleType] = {m.NAME: m for m in (
     area,
     point,
     spot,
+    goniometric,
+    projection,
 )}
 
 
@@ -94,6 +97,17 @@ def _shape_triangles(desc: SceneDescription, shape: int, inst_shape: np.ndarray,
     return np.concatenate(tris) if tris else np.zeros((0, 3, 3))
 
 
+def _pbrt_shape_area(mesh: MeshDesc, tris: np.ndarray) -> float:
+    """The area of one of the pbrt-v4 shapes an emissive shape stands for, which an area light's
+    ``power`` divides by: a sphere's, disk's or cylinder's exact object-space area, else the mean
+    world-space area of a triangle (or of a bilinear patch) over every instance."""
+    if mesh.analytic_area is not None:
+        return mesh.analytic_area
+    total = 0.5 * float(np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]), axis=1).sum())
+    instances = len(tris) / len(mesh.indices)
+    return total / (instances * (mesh.pbrt_shapes or len(mesh.indices)))
+
+
 def build_light_table(desc: SceneDescription, inst_shape: np.ndarray, xforms: np.ndarray
                       ) -> tuple[LightTable, np.ndarray]:
     """Every light's table row: the shapes' area lights first (in shape order), then the scene's
@@ -109,7 +123,8 @@ def build_light_table(desc: SceneDescription, inst_shape: np.ndarray, xforms: np
         tris = None if shape is None else _shape_triangles(desc, shape, inst_shape, xforms)
         if tris is not None and not len(tris):
             continue                                # an emissive shape nobody places
-        e = module.entry(light_desc, tris)
+        e = module.entry(light_desc, tris) if shape is None else \
+            module.entry(light_desc, tris, _pbrt_shape_area(desc.meshes[desc.shapes[shape].mesh], tris))
         if e is not None:
             index = table.add(kind_id(module.NAME), module.ROW, e)
             if shape is not None:

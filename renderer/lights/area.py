@@ -1,6 +1,14 @@
 """pbrt-v4's ``diffuse`` area light (``AreaLightSource "diffuse"``): the shapes that follow emit
 radiance ``L`` from their front side (both with ``twosided``). Sampled by area, triangles chosen
 in proportion to their area, so every instance of an emissive shape is one light.
+
+``power`` > 0 is pbrt-v4's: it multiplies ``scale`` by power / (π × area × 2 if two-sided) for the
+area of one pbrt-v4 shape, so that shape emits that power (an rgb ``L`` keeps its own magnitude, a
+blackbody has luminance 1). For a sphere, disk or cylinder that is its exact area in object space
+(pbrt-v4's Shape::Area ignores the transform's scale); in a triangle or bilinear mesh pbrt-v4
+makes every triangle or patch a light of that power, which we reproduce with the mean triangle or
+patch area (exact for equal ones, such as a quad's two triangles; with unequal ones pbrt-v4's
+radiance differs per triangle).
 """
 from __future__ import annotations
 
@@ -9,6 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import warp as wp
 
+from renderer.lights import point
 from renderer.lights.sample import LightEval, LightSample
 from renderer.lights.table import LightEntry, Lights, Row, colour_parameters, scaled_colour
 from renderer.parameters import Parameter, Parameters
@@ -22,14 +31,16 @@ DIRECTIVE = "AreaLightSource"
 PARAMS = Parameters(
     *colour_parameters("L", "emitted radiance"),
     Parameter("twosided", "bool", False, doc="emit from both sides, not only along the normal"),
+    Parameter("power", "float", -1.0, doc="if > 0, the power (W) each pbrt-v4 shape emits: it rescales scale"),
 )
 ROW = Row(floats=("area",), ints=("triangles", "two_sided"))
 F, K = ROW.F, ROW.K
 
 
-def entry(light: LightDesc, tris: np.ndarray | None) -> LightEntry | None:
-    """``tris``: (T, 3, 3) world-space triangles with outward winding. Triangles without area are
-    never sampled; a shape with no area at all is no light (None)."""
+def entry(light: LightDesc, tris: np.ndarray | None, shape_area: float | None = None) -> LightEntry | None:
+    """``tris``: (T, 3, 3) world-space triangles with outward winding; ``shape_area``: the area of
+    one of pbrt-v4's shapes (above; None: the mean triangle's). Triangles without area are never
+    sampled; a shape with no area at all is no light (None)."""
     areas = 0.5 * np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]), axis=1)
     total = float(areas.sum())
     keep = areas > 0
@@ -39,7 +50,8 @@ def entry(light: LightDesc, tris: np.ndarray | None) -> LightEntry | None:
     cdf = np.concatenate([[0.0], np.cumsum(areas) / total]).astype(np.float32)
     cdf[-1] = 1.0
     v = light.values
-    return LightEntry(L=scaled_colour(v, "L"), floats={"area": total},
+    k_e = np.pi * (2.0 if v["twosided"] else 1.0) * (total / len(areas) if shape_area is None else shape_area)
+    return LightEntry(L=scaled_colour(v, "L", point.power_factor(v, k_e)), floats={"area": total},
                       ints={"triangles": len(tris), "two_sided": int(v["twosided"])},
                       f_data=cdf, v_data=np.asarray(tris, dtype=np.float32).reshape(-1, 3))
 

@@ -64,7 +64,7 @@ def _cone_solid_angle(cos_max: float) -> float:
 
 
 @wp.func
-def escaped(lights: Lights, i: int, d: wp.vec3) -> LightEval:
+def escaped(lights: Lights, i: int, p: wp.vec3, d: wp.vec3) -> LightEval:
     """A soft sun seen along d: its irradiance spread evenly over the cone (zero outside, and for
     a delta light)."""
     e = LightEval()

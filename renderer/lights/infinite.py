@@ -1,6 +1,12 @@
 """pbrt-v4's ``infinite`` light: constant radiance ``L``, or an environment image (square: pbrt-v4's
 equal-area octahedral map; 2:1: latitude-longitude), importance sampled with a piecewise-constant
-2D distribution over the image. ``scale`` multiplies either.
+2D distribution over the image. ``scale`` multiplies either. ``illuminance`` > 0 (lux) rescales it
+as pbrt-v4 does: constant ``L`` by E / π (the illuminance of uniform unit radiance on an upward
+patch; an rgb ``L`` keeps its own magnitude); an image by E / k, where k is pbrt-v4's sum over the
+pixels above the horizon of luminance × cos θ × 2π / pixel count, which is half the map's true
+upward illuminance (so a map ends up twice as bright as a constant ``L`` of the same illuminance,
+as in pbrt-v4). ``portal`` (four corners of a rectangle, world space) makes it pbrt-v4's portal
+light: the map (or a constant ``L``) is seen, and sampled, only through that window (portal.py).
 """
 from __future__ import annotations
 
@@ -10,8 +16,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import warp as wp
 
-from renderer.errors import Location, MissingFileError, SceneError
-from renderer.io.images import read_image
+from renderer.color.rgb import luminance
+from renderer.errors import Location, SceneError
+from renderer.lights import portal
+from renderer.lights.images import read_light_image, resolved, rgb_of
 from renderer.lights.sample import LightEval, LightSample
 from renderer.lights.table import LightEntry, Lights, Row, colour_parameters, scaled_colour
 from renderer.parameters import Parameter, Parameters
@@ -28,11 +36,14 @@ DIRECTIVE = "LightSource"
 PARAMS = Parameters(
     *colour_parameters("L", "constant radiance (not with filename)"),
     Parameter("filename", "string", doc="environment image: square = equal-area, 2:1 = lat-long"),
+    Parameter("illuminance", "float", -1.0, doc="if > 0, the illuminance (lux) on an upward patch (pbrt-v4)"),
+    Parameter("portal", "points3", doc="4 world-space corners of a rectangle: light enters only through it (pbrt-v4)"),
 )
 
 MAP_CONSTANT = 0
 MAP_EQUAL_AREA = 1
 MAP_LATLONG = 2
+MAP_PORTAL = 3                  # an equal-area map (or L) rectified over a portal's directions
 ROW = Row(ints=("mapping", "width", "height"))
 K = ROW.K
 
@@ -43,17 +54,12 @@ def check(given: dict[str, Any], light_to_world: np.ndarray, loc: Location | Non
     if "filename" in given and "L" in given:
         raise SceneError('LightSource "infinite": give either "L" or "filename", not both', loc)
     if "filename" in given:
-        path = Path(given["filename"])
-        given = {**given, "filename": str(base_dir / path if base_dir is not None else path)}
-        _image_path(given, loc)
+        given = resolved(given, loc, base_dir, "environment image")
+    if "portal" in given:
+        if len(given["portal"]) != 12:
+            raise SceneError(f'LightSource "infinite": "portal" needs 4 points, got {len(given["portal"]) / 3:g}', loc)
+        portal.frame(np.asarray(given["portal"]), loc)
     return given
-
-
-def _image_path(values: dict[str, Any], loc: Location | None) -> Path:
-    path = Path(values["filename"])
-    if not path.is_file():
-        raise MissingFileError(path, loc, "environment image")
-    return path
 
 
 def _mapping(image: np.ndarray, loc: Location | None) -> int:
@@ -73,28 +79,64 @@ def distribution_function(rgb: np.ndarray, mapping: int) -> tuple[np.ndarray, np
     return rgb.max(axis=2), weight
 
 
+def pbrt_illuminance(rgb: np.ndarray, mapping: int) -> float:
+    """pbrt-v4's illuminance of a map (ImageInfiniteLight with ``illuminance``): luminance × cos θ
+    over the pixel centres above the horizon (+z of the map's frame), times half a pixel's solid
+    angle (2π / pixel count for the equal-area square, which is what pbrt-v4 computes)."""
+    h, w = rgb.shape[:2]
+    u, v = np.meshgrid((np.arange(w) + 0.5) / w, (np.arange(h) + 0.5) / h)
+    if mapping == MAP_EQUAL_AREA:
+        from renderer.sampling.equal_area import square_to_sphere
+        cos_t = square_to_sphere(np.stack([u, v], -1).reshape(-1, 2))[:, 2].reshape(h, w)
+        half_pixel = 2.0 * np.pi / (w * h)
+    else:                                       # lat-long: a pixel's solid angle varies with its row
+        cos_t = np.cos(np.pi * v)
+        half_pixel = 0.5 * (2.0 * np.pi / w) * (np.pi / h) * np.sin(np.pi * v)
+    up = cos_t > 0
+    return float((luminance(rgb.astype(np.float64))[up] * cos_t[up] * np.broadcast_to(half_pixel, up.shape)[up]).sum())
+
+
 def entry(light: LightDesc, tris: np.ndarray | None) -> LightEntry:
     """The row: mapping and size, the light frame, and the pixels and CDFs in the pools."""
     v = light.values
     R = np.asarray(light.light_to_world, dtype=np.float64)[:3, :3]
-    e = LightEntry(L=scaled_colour(v, "L"), ints={"mapping": MAP_CONSTANT, "width": 1, "height": 1},
+    E = v["illuminance"]
+    e = LightEntry(L=scaled_colour(v, "L", E / np.pi if E > 0 else 1.0),
+                   ints={"mapping": MAP_CONSTANT, "width": 1, "height": 1},
                    to_world=R, to_light=np.linalg.inv(R), escapes=True)
-    if v["filename"] is None:
+    if v["filename"] is None and v["portal"] is None:
         return e
-    try:
-        image = read_image(_image_path(v, light.loc), srgb=True)
-    except OSError as e:
-        raise SceneError(f"environment image: {e}", light.loc) from e
-    mapping = _mapping(image, light.loc)
-    rgb = image[..., :3] if image.shape[2] >= 3 else np.repeat(image[..., :1], 3, axis=2)
-    if not np.all(np.isfinite(rgb)) or np.any(rgb < 0):
-        raise SceneError("environment image contains negative, NaN or infinite values", light.loc)
-    rgb = np.ascontiguousarray(rgb, dtype=np.float32)
+    if v["filename"] is None:       # L through a portal: pbrt-v4 makes a 1x1 map of it
+        rgb, mapping = np.asarray(v["L"], np.float32).reshape(1, 1, 3), MAP_EQUAL_AREA
+    else:
+        image = read_light_image(v, light.loc, "environment image")
+        mapping = _mapping(image, light.loc)
+        rgb = np.ascontiguousarray(rgb_of(image))
+    k = pbrt_illuminance(rgb, mapping) if E > 0 else 1.0
+    factor = (E / k if k > 0 else 0.0) if E > 0 else 1.0
+    e.L = np.full(3, v["scale"] * factor)
+    if v["portal"] is not None:
+        return _portal_entry(e, rgb, mapping, np.asarray(v["portal"]).reshape(4, 3), light.loc)
     h, w = rgb.shape[:2]
     cond, marg, _ = distribution_2d(*distribution_function(rgb, mapping))
     e.ints = {"mapping": mapping, "width": w, "height": h}
     e.f_data = np.concatenate([cond.ravel(), marg])    # (h, w + 1) conditional CDFs, then the marginal
     e.v_data = rgb.reshape(-1, 3)
+    return e
+
+
+def _portal_entry(e: LightEntry, rgb: np.ndarray, mapping: int, corners: np.ndarray,
+                  loc: Location | None) -> LightEntry:
+    """The portal light's row: the rectified image and two opposite corners in the vector pool,
+    the portal's frame as the light frame."""
+    if mapping != MAP_EQUAL_AREA:
+        raise SceneError('LightSource "infinite": a "portal" needs a square equal-area map (as pbrt-v4)', loc)
+    f = portal.frame(corners, loc)
+    n = rgb.shape[0]
+    rect = portal.rectified(rgb, e.to_light, f)
+    e.ints = {"mapping": MAP_PORTAL, "width": n, "height": n}
+    e.to_world, e.to_light = f.T, f
+    e.v_data = np.concatenate([rect.reshape(-1, 3), corners[[0, 2]]]).astype(np.float32)
     return e
 
 
@@ -160,7 +202,9 @@ def pdf(lights: Lights, i: int, d: wp.vec3) -> float:
 
 
 @wp.func
-def escaped(lights: Lights, i: int, d: wp.vec3) -> LightEval:
+def escaped(lights: Lights, i: int, p: wp.vec3, d: wp.vec3) -> LightEval:
+    if lights.k[i, K.mapping] == MAP_PORTAL:
+        return portal.escaped(lights, i, lights.k[i, K.width], p, d)
     e = LightEval()
     e.L = radiance(lights, i, d)
     e.pdf = pdf(lights, i, d)
@@ -173,6 +217,8 @@ def sample(lights: Lights, i: int, p: wp.vec3, u: wp.vec2) -> LightSample:
     s.delta = False
     s.dist = 1.0e30
     mapping = lights.k[i, K.mapping]
+    if mapping == MAP_PORTAL:
+        return portal.sample(lights, i, lights.k[i, K.width], p, u)
     if mapping == MAP_CONSTANT:
         # the constant sky has no preferred direction
         s.wi = uniform_sphere(u)

@@ -32,15 +32,23 @@ V = ROW.V
 
 
 def position(values: dict[str, Any], light_to_world: np.ndarray) -> np.ndarray:
-    """The world-space position of ``from``."""
-    p = np.asarray(light_to_world, np.float64) @ np.append(np.asarray(values["from"], np.float64), 1.0)
+    """The world-space position of ``from`` (the light space's origin for lights without one)."""
+    p = np.asarray(light_to_world, np.float64) @ np.append(np.asarray(values.get("from", (0.0, 0.0, 0.0)), np.float64), 1.0)
     return p[:3] / p[3]
 
 
 def intensity(values: dict[str, Any], power_per_intensity: float) -> np.ndarray:
     """I times scale, and times power / k_e when a power is given (k_e: the power emitted per unit
     of intensity, 4π for a point light)."""
-    return scaled_colour(values, "I", values["power"] / power_per_intensity if values["power"] > 0 else 1.0)
+    return scaled_colour(values, "I", power_factor(values, power_per_intensity))
+
+
+def power_factor(values: dict[str, Any], power_per_unit: float) -> float:
+    """pbrt-v4's ``power`` > 0: the factor power / k_e on ``scale``, k_e being what the light emits
+    at scale 1 (1 without a power, 0 for a light that emits nothing at scale 1)."""
+    if values["power"] <= 0:
+        return 1.0
+    return values["power"] / power_per_unit if power_per_unit > 0 else 0.0
 
 
 def entry(light: LightDesc, tris: np.ndarray | None) -> LightEntry:

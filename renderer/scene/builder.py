@@ -31,6 +31,7 @@ from renderer.scene.support import KNOWN_NAMES, OPTIONS_ONLY, PBRT_V3_NAMES, UNS
 from renderer.scene.texture_params import check_depth, read_texture
 from renderer.sampling.sampler_spec import DEFAULT_SAMPLER, RANDOMIZATIONS
 from renderer.settings import sampler_spec
+from renderer.scene.upgrade import upgraded
 from renderer.scene.transform import (check_single_precision, from_pbrt_matrix, inverse, look_at,
                                       read_instance_transforms, rotate, scale, swaps_handedness, transformed_mesh,
                                       translate)
@@ -83,6 +84,7 @@ class Builder:
         return self.scene
 
     def _directive(self, d: Directive) -> None:
+        d = upgraded(d, self.warn)                     # pbrt-v3 syntax, read as pbrt-v4's --upgrade writes it
         if self.world_begun and d.name in OPTIONS_ONLY:
             raise SceneError(f"{d.name} must come before WorldBegin", d.loc)
         if not self.world_begun and d.name in WORLD_ONLY:

@@ -95,6 +95,11 @@ class MeshDesc:
     uvs: np.ndarray | None = None        # (V, 2) float32
     loc: Location | None = None
     name: str = ""
+    #: a sphere's, disk's or cylinder's exact area in object space (pbrt-v4's Shape::Area, which
+    #: an area light's ``power`` divides by); None for meshes, whose every triangle is a pbrt shape
+    analytic_area: float | None = None
+    #: how many pbrt-v4 shapes the triangles stand for (a bilinear mesh's patches); 0: one per triangle
+    pbrt_shapes: int = 0
 
 
 @dataclass

@@ -63,6 +63,11 @@ def _grid(P: np.ndarray, N: np.ndarray, UV: np.ndarray) -> tuple[np.ndarray, ...
     return V, F, N.reshape(-1, 3), UV.reshape(-1, 2)
 
 
+def _with_area(mesh: MeshDesc, area: float) -> MeshDesc:
+    mesh.analytic_area = float(area)
+    return mesh
+
+
 def _uv_grid(nu: int, nv: int) -> tuple[np.ndarray, np.ndarray]:
     return np.meshgrid(np.linspace(0.0, 1.0, nu + 1), np.linspace(0.0, 1.0, nv + 1))
 
@@ -93,7 +98,8 @@ def sphere(params: ParamSet, loc: Location) -> MeshDesc:
     u, v = _uv_grid(_segments(phi_max), max(2, math.ceil(CIRCLE_SEGMENTS / 2 * (theta_min - theta_max) / math.pi)))
     phi, theta = u * phi_max, theta_min + v * (theta_max - theta_min)
     N = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], -1)
-    return validated_mesh(*_grid(r * N, N, np.stack([u, v], -1)), loc, "sphere")
+    return _with_area(validated_mesh(*_grid(r * N, N, np.stack([u, v], -1)), loc, "sphere"),
+                      phi_max * r * abs(zmax - zmin))
 
 
 def cylinder(params: ParamSet, loc: Location) -> MeshDesc:
@@ -107,7 +113,7 @@ def cylinder(params: ParamSet, loc: Location) -> MeshDesc:
     phi = u * phi_max
     N = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(u)], -1)
     P = np.stack([r * N[..., 0], r * N[..., 1], z0 + v * (z1 - z0)], -1)
-    return validated_mesh(*_grid(P, N, np.stack([u, v], -1)), loc, "cylinder")
+    return _with_area(validated_mesh(*_grid(P, N, np.stack([u, v], -1)), loc, "cylinder"), (z1 - z0) * r * phi_max)
 
 
 def disk(params: ParamSet, loc: Location) -> MeshDesc:
@@ -122,7 +128,7 @@ def disk(params: ParamSet, loc: Location) -> MeshDesc:
     phi, rho = u * phi_max, r - v * (r - ri)
     P = np.stack([rho * np.cos(phi), rho * np.sin(phi), np.full_like(u, h)], -1)
     N = np.broadcast_to([0.0, 0.0, 1.0], P.shape)
-    return validated_mesh(*_grid(P, N, np.stack([u, v], -1)), loc, "disk")
+    return _with_area(validated_mesh(*_grid(P, N, np.stack([u, v], -1)), loc, "disk"), phi_max * 0.5 * (r * r - ri * ri))
 
 
 def _indices(params: ParamSet, loc: Location, shape: str, n_points: int, corners: int) -> np.ndarray:
@@ -163,7 +169,9 @@ def bilinear_mesh(params: ParamSet, loc: Location) -> MeshDesc:
     offsets = np.cumsum([0] + [len(part[0]) for part in parts[:-1]])
     V, _, NN, TT = (np.concatenate(xs) for xs in zip(*parts))
     F = np.concatenate([part[1] + o for part, o in zip(parts, offsets)])
-    return validated_mesh(V, F, NN, TT, loc, "bilinearmesh")
+    mesh = validated_mesh(V, F, NN, TT, loc, "bilinearmesh")
+    mesh.pbrt_shapes = len(parts)
+    return mesh
 
 
 def _patch(corners: np.ndarray, normals: np.ndarray | None, uvs: np.ndarray | None) -> tuple[np.ndarray, ...]:

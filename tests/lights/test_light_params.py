@@ -50,10 +50,9 @@ def test_infinite_light_defaults_and_image(tmp_path):
     s = load(tmp_path, HEAD + 'LightSource "infinite"\nLightSource "infinite" "string filename" "sky.exr" '
                               '"float scale" 3 "float illuminance" 5\n')
     a, b = s.lights
-    assert a.values == {"L": (1.0, 1.0, 1.0), "filename": None, "scale": 1.0}
+    assert a.values == {"L": (1.0, 1.0, 1.0), "filename": None, "scale": 1.0, "illuminance": -1.0, "portal": None}
     assert b.values["filename"] == str(tmp_path / "sky.exr") and b.values["scale"] == 3.0
-    assert s.warnings == [f'{tmp_path / "scene.pbrt"}:4: LightSource "infinite": parameter "float illuminance" '
-                          'is not supported and was ignored']
+    assert b.values["illuminance"] == 5.0 and s.warnings == []
     error_at(tmp_path, HEAD + 'LightSource "infinite" "string filename" "gone.exr"', 3, "not found",
              kind=MissingFileError)
     error_at(tmp_path, HEAD + 'LightSource "infinite" "string filename" "sky.exr" "rgb L" [1 1 1]', 3, "not both")
@@ -73,7 +72,7 @@ def test_a_bad_light_parameter_is_located_at_load_time(tmp_path, text, line, mat
 
 
 @pytest.mark.parametrize("text, match", [
-    ('LightSource "goniometric"', 'LightSource "goniometric" is not supported'),
+    ('LightSource "sunsky"', 'LightSource "sunsky" is not supported'),
     ('LightSource "nope"', 'LightSource "nope" is not supported .*"infinite", "distant", "point", "spot"'),
     ('LightSource "diffuse"', 'LightSource "diffuse" is not supported'),        # an area light, not a LightSource
     ('AreaLightSource "spot"', 'AreaLightSource "spot" is not supported .*"diffuse"'),
@@ -103,8 +102,10 @@ def test_python_lights_take_plain_values():
         light("point", scale="bright")
     with pytest.raises(SceneError, match="give no direction"):
         light("spot", from_=(1, 1, 1), to=(1, 1, 1))
-    with pytest.raises(UnsupportedError, match='"projection" is not supported'):
-        light("projection")
+    with pytest.raises(UnsupportedError, match='"sunsky" is not supported'):
+        light("sunsky")
+    with pytest.raises(MissingFileError):
+        light("projection", filename=Path("/nonexistent/slide.exr"))
     with pytest.raises(MissingFileError):
         light("infinite", filename=Path("/nonexistent/sky.exr"))
 

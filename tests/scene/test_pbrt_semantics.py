@@ -73,11 +73,11 @@ def test_every_unsupported_thing_is_reported_at_load_in_one_error(tmp_path):
                                   'NamedMaterial "c"\nShape "curve"\nShape "sphere"\n'
                                   'Material "diffuse" "texture reflectance" "w"\nShape "sphere"\n'
                                   'Material "diffuse" "texture reflectance" "gone"\nShape "disk"\n'
-                                  'LightSource "goniometric"\n')
+                                  'LightSource "sunsky"\n')
     with pytest.raises(SceneErrors) as info:
         load_description(path)
     lines = [e.loc.line for e in info.value.errors]
-    # ptex, measured, curve, the undefined texture, goniometric: not the follow-ons of a
+    # ptex, measured, curve, the undefined texture, sunsky: not the follow-ons of a
     # refused texture or named material
     assert lines == [3, 4, 6, 12, 10], [str(e) for e in info.value.errors]
 
