@@ -54,6 +54,7 @@ class DeviceScene:
     height: int
     keep: list = field(default_factory=list)     # every Warp object the struct points into
     geometry: GeometryData | None = None
+    warnings: list[str] = field(default_factory=list)   # the upload's own (a table the thin-film mode could not bake)
 
 
 def _spectral_table(needed: bool, thin_film: str, device: str) -> tuple[RgbWeightTable, int]:
@@ -75,7 +76,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     if not desc.instance_sets:
         raise SceneError("the scene contains no shapes", None)
     table = TextureTable()
-    mats, mat_keep, used = build_materials(desc.materials, desc.textures, table, device)
+    mats, mat_keep, used, warnings = build_materials(desc.materials, desc.textures, table, device, thin_film)
 
     # flatten instance sets into one instance list
     inst_mesh, inst_shape, xforms = [], [], []
@@ -122,4 +123,5 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     )
     keep = [geo, mat_keep, tex_keep, light_keep, cam_keep, S.shape_material, S.shape_light, S.shape_flip,
             S.spectral.w]
-    return DeviceScene(struct=S, features=feats, device=device, width=width, height=height, keep=keep, geometry=geo)
+    return DeviceScene(struct=S, features=feats, device=device, width=width, height=height, keep=keep, geometry=geo,
+                       warnings=warnings)
