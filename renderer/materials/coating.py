@@ -9,10 +9,11 @@ substrate lies below. ``clear`` says whether light can cross into the substrate:
 opaque one (T is dropped, and light never arrives from below), true for a clear one (then hits
 from below see the media swapped and a stack reversed).
 
-``balanced`` is for paths that cross the coating many times (the layered walk): with spectral:N,
-R and T are jittered estimates whose white is 1 only on average, and clipping R ≤ 1 under total
-internal reflection (R ≡ 1) then loses what the estimate overshoots: some 1 % per channel at
-N = 16 over a white base. Dividing both by the same jitter's estimate of white makes a flat
+``balanced`` is for coatings over a clear substrate, which paths cross many times (refraction in
+and out, the layered walk): with spectral:N, R and T are jittered estimates whose white is 1 only
+on average, and clipping R ≤ 1 under total internal reflection (R ≡ 1) then loses what the
+estimate overshoots: some 1 % per channel at N = 16 over a white base, and 7–9 % in red and blue
+at N = 8 for a coated glass sphere in a white furnace (0.926, 0.981, 0.914; balanced: 1.000). Dividing both by the same jitter's estimate of white makes a flat
 spectrum exact at every sample, so R + T = 1 per channel for lossless media (a ratio estimator:
 consistent, with a bias of order 1/N² in the colour instead of a loss at every bounce).
 

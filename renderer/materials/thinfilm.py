@@ -128,7 +128,7 @@ def film_coating(b: BSDF) -> Coating:
     c.d = wp.max(b.p[SLOT.thickness][0] + b.p[SLOT.thicknessscale][0] * b.p[SLOT.thicknessmap][0], 0.0)
     c.total = b.p[SLOT.thickness][0]
     c.clear = _transmissive(b) or _layered(b)
-    c.balanced = _layered(b)
+    c.balanced = c.clear       # many crossings (a clear substrate, the layered walk): see coating.py
     c.layers = b.layers
     c.layer_first = b.layer_first
     c.layer_count = b.layer_count

@@ -103,3 +103,20 @@ def test_named_metals_and_glass_match_pbrt():
     img, _ = ours_of("named_spectra")
     gold = (slice(16, 30), slice(17, 27))
     np.testing.assert_allclose(img[gold].mean((0, 1)), ref[gold].mean((0, 1)), rtol=0.03)
+
+
+def test_a_spectral_colour_keeps_its_spectrum_through_python_values_and_pickles():
+    """A colour read from a spectrum is its RGB projection everywhere, and still carries the
+    samples for the conductor's spectral Fresnel table (also from Python and after pickling)."""
+    import pickle
+
+    from renderer.color.named_spectra import SpectralRGB
+    from renderer.materials import conductor, material
+
+    eta, k = (SpectralRGB(spectrum_rgb(named()[f"metal-Au-{p}"]), named()[f"metal-Au-{p}"]) for p in ("eta", "k"))
+    m = material("conductor", eta=eta, k=k)
+    assert isinstance(m.values["eta"], SpectralRGB) and tuple(m.values["eta"]) == tuple(eta)
+    back = pickle.loads(pickle.dumps(m.values["k"]))
+    np.testing.assert_array_equal(back.samples, k.samples)
+    assert len(conductor.table_rows(m.values, None, "rgb3")[0]) > 0
+    assert len(conductor.table_rows(material("conductor").values, None, "rgb3")[0]) == 0   # RGB copper: no table
