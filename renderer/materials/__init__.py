@@ -6,8 +6,8 @@ defaults: :class:`renderer.parameters.Parameters`), the Warp functions ``eval_pd
 ``resolve(values, loc) -> (values, extra flag bits)``, and where it has per-layer data, an optional
 ``layer_rows(values, loc) -> (n, 4) array`` for the scene's layer table, and where it bakes a
 table over the angle of incidence (:mod:`renderer.optics.angular_table`), an optional
-``table_rows(values, loc, thin_film) -> ((n, 4) array, warning)`` (no rows: no table). Registering the module in ``REGISTRY`` is
-all it takes to add one: parsing, validation, the device layout and the docs table follow from
+``table_rows(values, loc, thin_film) -> ((n, 4) array, warning)`` (no rows: no table).
+Registering the module in ``REGISTRY`` is all it takes to add one: parsing, validation, the device layout and the docs table follow from
 ``PARAMS``, and kernels are specialised to the materials a scene uses.
 """
 from __future__ import annotations

@@ -13,9 +13,10 @@ from below see the media swapped and a stack reversed).
 and out, the layered walk): with spectral:N, R and T are jittered estimates whose white is 1 only
 on average, and clipping R ≤ 1 under total internal reflection (R ≡ 1) then loses what the
 estimate overshoots: some 1 % per channel at N = 16 over a white base, and 7–9 % in red and blue
-at N = 8 for a coated glass sphere in a white furnace (0.926, 0.981, 0.914; balanced: 1.000). Dividing both by the same jitter's estimate of white makes a flat
-spectrum exact at every sample, so R + T = 1 per channel for lossless media (a ratio estimator:
-consistent, with a bias of order 1/N² in the colour instead of a loss at every bounce).
+at N = 8 for a coated glass sphere in a white furnace (0.926, 0.981, 0.914; balanced: 1.000).
+Dividing both by the same jitter's estimate of white makes a flat spectrum exact at every sample,
+so R + T = 1 per channel for lossless media (a ratio estimator: consistent, with a bias of order
+1/N² in the colour instead of a loss at every bounce).
 
 ``table_first`` > 0 (the thin-film mode ``table``): R and T are read from the material's baked
 table over the angle (:mod:`renderer.optics.angular_table`), the 1 nm reference itself, white

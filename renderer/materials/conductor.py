@@ -109,7 +109,8 @@ def conductor_eval(eta: wp.vec3, k: wp.vec3, alpha: wp.vec2, wo: wp.vec3, wi: wp
     o = signed_z(wo, sgn)
     i = signed_z(wi, sgn)
     wm = wp.normalize(o + i)
-    e.f = conductor_fresnel(wp.dot(o, wm), eta, k, rows, table) * (ggx_D(wm, alpha) * ggx_G(o, i, alpha) / (4.0 * o[2] * i[2]))
+    g = ggx_D(wm, alpha) * ggx_G(o, i, alpha) / (4.0 * o[2] * i[2])
+    e.f = conductor_fresnel(wp.dot(o, wm), eta, k, rows, table) * g
     e.pdf = ggx_visible_pdf(o, wm, alpha) / (4.0 * wp.abs(wp.dot(o, wm)))
     return e
 
