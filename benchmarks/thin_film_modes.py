@@ -13,8 +13,8 @@ nacre-like stacks (aragonite 1.60, 400 nm ± 20 % | organic matrix 1.43, 30 nm, 
 seeds); ΔE00 against the 1 nm reference (monochromatic) and the cost of one RGB evaluation of each
 mode (Warp CPU kernel, one thread). ``table`` is the render mode of that name: a table over the
 angle baked from the reference (:mod:`renderer.optics.angular_table`), looked up at each angle;
-its bake time per side is a column of its own, and "max |ΔR|" is its largest reflectance error at
-random angles. Then whole renders (``--renders``): scenes/nacre.pbrt and scenes/mirror_coatings.pbrt
+its bake time per side and its largest reflectance error at random angles ("max abs ΔR") are rows
+of their own. Then whole renders (``--renders``): scenes/nacre.pbrt and scenes/mirror_coatings.pbrt
 at 64x36, 4 spp, with their stacks replaced by 1, 10, 100 and 200 layers of the same materials,
 in each mode: seconds of upload (the table's bake) and of rendering, kernels already compiled.
 
@@ -161,14 +161,14 @@ def table_errors(eta, k, d, rng) -> tuple[np.ndarray, float, float]:
 
 def stack_errors(family: str, n_layers: int) -> dict[str, np.ndarray]:
     """ΔE00 of each mode against the reference over the family's variants and COS_THETA (the
-    table also at random angles); "table max |ΔR|" and "table bake s" hold one value per stack."""
+    table also at random angles); "table max abs ΔR" and "table bake s" hold one value per stack."""
     errors: dict[str, list[np.ndarray]] = {}
     rng = np.random.default_rng(2)
     for v in range(STACK_VARIANTS):
         eta, k, d = stack(family, n_layers, v)
         e, dr, bake = table_errors(eta, k, d, rng)
         errors.setdefault("table", []).append(e)
-        errors.setdefault("table max |ΔR|", []).append(np.array([dr]))
+        errors.setdefault("table max abs ΔR", []).append(np.array([dr]))
         errors.setdefault("table bake s", []).append(np.array([bake]))
         ref = optics.multilayer_rgb(COS_THETA, eta, k, d, mode="reference")
         for mode in MODES:
