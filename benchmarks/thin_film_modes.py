@@ -11,21 +11,29 @@ Stacks (``--stacks``): the same modes for multilayer stacks of 1, 10, 100 and 20
 families: quarter-wave TiO2/SiO2 mirrors (2.4 | 1.46 on glass, design wavelengths 420–680 nm) and
 nacre-like stacks (aragonite 1.60, 400 nm ± 20 % | organic matrix 1.43, 30 nm, on matrix, 16
 seeds); ΔE00 against the 1 nm reference (monochromatic) and the cost of one RGB evaluation of each
-mode (Warp CPU kernel, one thread).
+mode (Warp CPU kernel, one thread). ``table`` is the render mode of that name: a table over the
+angle baked from the reference (:mod:`renderer.optics.angular_table`), looked up at each angle;
+its bake time per side and its largest reflectance error at random angles ("max abs ΔR") are rows
+of their own. Then whole renders (``--renders``): scenes/nacre.pbrt and scenes/mirror_coatings.pbrt
+at 64x36, 4 spp, with their stacks replaced by 1, 10, 100 and 200 layers of the same materials,
+in each mode: seconds of upload (the table's bake) and of rendering, kernels already compiled.
 
-    WARP_CACHE_PATH=.warp-cache .venv/bin/python benchmarks/thin_film_modes.py [--stacks]
+    WARP_CACHE_PATH=.warp-cache .venv/bin/python benchmarks/thin_film_modes.py [--stacks] [--renders]
 """
 from __future__ import annotations
 
+import re
 import sys
+import tempfile
 import time
 from functools import lru_cache
+from pathlib import Path
 
 import colour
 import numpy as np
 import warp as wp
 
-from renderer.optics import arrays as optics
+from renderer.optics import angular_table, arrays as optics
 from renderer.color.rgb_weights import make_rgb_weight_table
 from renderer.color import spectral
 
@@ -125,12 +133,43 @@ def stack_cost_ns(mode: str, n_layers: int) -> float:
         wp.array(weights.astype(np.float32), dtype=wp.vec3, device="cpu"), out])
 
 
+TABLE_ANGLES = 64     # random cosines per stack at which the table is checked
+
+
+@lru_cache(maxsize=None)
+def table_cost_ns() -> float:
+    """Nanoseconds per RGB (R, T) lookup of a baked table (Warp CPU kernel, one thread): the same
+    for every stack, whose size only enters the bake."""
+    n0, n_sub, rows = optics.stack_layers(*stack("nacre", 10, 0))
+    table = wp.array(angular_table.stack_table(n0, complex(*n_sub), rows), dtype=wp.vec4, device="cpu")
+    m = COST_EVALS
+    cos0 = wp.array(np.random.default_rng(0).uniform(0.0, 1.0, m).astype(np.float32), dtype=float, device="cpu")
+    return _time(angular_table._lookup_kernel, m, [table, cos0, 2, 0, wp.empty(m, dtype=wp.vec3, device="cpu")])
+
+
+def table_errors(eta, k, d, rng) -> tuple[np.ndarray, float, float]:
+    """(ΔE00 at COS_THETA and random angles, largest |ΔR|, bake seconds) of one stack's table."""
+    cos = np.concatenate([COS_THETA, rng.uniform(0.0, 1.0, TABLE_ANGLES)])
+    n0, n_sub, rows = optics.stack_layers(eta, k, d)
+    start = time.perf_counter()
+    table = angular_table.stack_table(n0, complex(*n_sub), rows)
+    bake = time.perf_counter() - start
+    r = angular_table.lookup(table, cos)
+    ref = optics.multilayer_rgb(cos, eta, k, d, mode="reference")
+    return delta_e(r, ref), float(np.abs(r - ref).max()), bake
+
+
 def stack_errors(family: str, n_layers: int) -> dict[str, np.ndarray]:
-    """ΔE00 of each mode against the reference over the family's variants and COS_THETA."""
+    """ΔE00 of each mode against the reference over the family's variants and COS_THETA (the
+    table also at random angles); "table max abs ΔR" and "table bake s" hold one value per stack."""
     errors: dict[str, list[np.ndarray]] = {}
     rng = np.random.default_rng(2)
     for v in range(STACK_VARIANTS):
         eta, k, d = stack(family, n_layers, v)
+        e, dr, bake = table_errors(eta, k, d, rng)
+        errors.setdefault("table", []).append(e)
+        errors.setdefault("table max abs ΔR", []).append(np.array([dr]))
+        errors.setdefault("table bake s", []).append(np.array([bake]))
         ref = optics.multilayer_rgb(COS_THETA, eta, k, d, mode="reference")
         for mode in MODES:
             errors.setdefault(mode, []).append(delta_e(optics.multilayer_rgb(COS_THETA, eta, k, d, mode=mode), ref))
@@ -156,12 +195,76 @@ def main_stacks() -> None:
         for f in ("mirror", "nacre"):
             for n in STACK_LAYERS:
                 e = table[f][n].get(name)
-                cells.append("0" if e is None else f"{e.mean():.2f} / {e.max():.1f}")
-        cost = [f"{stack_cost_ns(mode, n) / 1000:,.2f}" for n in STACK_LAYERS]
+                cells.append("0" if e is None else f"{e.mean():.2f} / {e.max():.1f}" if name.count(" ") == 0
+                             or "(" in name else f"{e.mean():.2g} / {e.max():.2g}")
+        if name.startswith("table "):
+            cost = [""] * len(STACK_LAYERS)
+        elif mode == "table":
+            cost = [f"{table_cost_ns() / 1000:,.3f}"] * len(STACK_LAYERS)
+        else:
+            cost = [f"{stack_cost_ns(mode, n) / 1000:,.2f}" for n in STACK_LAYERS]
         print(f"| {name} | " + " | ".join(cells + cost) + " |")
 
 
+RENDER_MODES = ("rgb3", "spectral:8", "spectral:32", "table")
+RENDER_SCENES = ("nacre", "mirror_coatings")
+
+
+def _layers(text: str, name: str, values: list[float]) -> str:
+    return re.sub(rf'"float {name}" \[[^\]]*\]', f'"float {name}" [{" ".join(f"{v:g}" for v in values)}]', text)
+
+
+def scene_with_layers(scene: str, n_layers: int) -> str:
+    """The scene's text with every stack replaced by n_layers of its own materials: nacre's cell
+    (tablet, matrix) or the mirror's (H, L) alternated, starting with the first."""
+    text = (Path(__file__).parent.parent / "scenes" / f"{scene}.pbrt").read_text()
+    if scene == "nacre":
+        cell = 2 if n_layers > 1 else 1
+        text = text.replace('"integer repeat" [40]', f'"integer repeat" [{n_layers // cell}]')
+        text = text.replace('"float layer_disorder" [0.15 0.3]', '"float layer_disorder" [0.15 0.3]' if cell == 2
+                            else '"float layer_disorder" [0.15]')
+        return _layers(_layers(text, "layer_eta", [1.68, 1.43][:cell]), "layer_thickness", [400.0, 25.0][:cell])
+    out = []
+    for line in text.splitlines():
+        for name in ("layer_eta", "layer_cauchyb", "layer_thickness"):
+            m = re.search(rf'"float {name}" \[([^\]]*)\]', line)
+            if m:
+                pair = [float(x) for x in m.group(1).split()[:2]]
+                line = _layers(line, name, [pair[i % 2] for i in range(n_layers)])
+        out.append(line)
+    return "\n".join(out) + "\n"
+
+
+def main_renders() -> None:
+    from renderer.api import load_scene, open_session
+    from renderer.settings import settings_for
+
+    print("Whole renders at 64x36, 4 spp, seed 7 (2 threads, loaded machine): seconds of upload (with the "
+          "table's bake) + rendering, kernels compiled beforehand.\n")
+    print("| scene | layers | " + " | ".join(RENDER_MODES) + " |")
+    print("|---|---:|" + "---:|" * len(RENDER_MODES))
+    with tempfile.TemporaryDirectory() as tmp:
+        for scene in RENDER_SCENES:
+            for n in STACK_LAYERS:
+                path = Path(tmp) / f"{scene}_{n}.pbrt"
+                path.write_text(scene_with_layers(scene, n))
+                desc = load_scene(path)
+                cells = []
+                for mode in RENDER_MODES:
+                    settings = settings_for(desc, seed=7, width=64, height=36, thin_film=mode)
+                    start = time.perf_counter()
+                    session = open_session(desc, settings)
+                    upload = time.perf_counter() - start - session.stats.compile_seconds
+                    stats = session.run(4)
+                    cells.append(f"{upload:.1f} + {stats.seconds:.1f}")
+                print(f"| {scene} | {n} | " + " | ".join(cells) + " |", flush=True)
+
+
 def main() -> None:
+    if "--renders" in sys.argv[1:]:
+        wp.config.quiet = True
+        main_renders()
+        return
     if "--stacks" in sys.argv[1:]:
         main_stacks()
         return

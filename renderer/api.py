@@ -51,7 +51,8 @@ def render(scene: SceneDescription, spp: int | None = None, device: str = "cpu",
            cluster: "Cluster | str | None" = None) -> np.ndarray:
     """Render and return linear RGB as float32 (H, W, 3). ``spp``, ``seed``, ``max_depth`` and the
     resolution default to the scene file's values. ``progress(done, total)`` runs after every pass.
-    ``thin_film``: the thinfilm material's colour mode, ``rgb3`` or ``spectral:N`` (default spectral:32).
+    ``thin_film``: the thinfilm material's colour mode, ``rgb3``, ``spectral:N`` (default spectral:32)
+    or ``table[:N]`` (docs/thinfilm.md).
     ``sampler``: a pbrt-v4 sampler name instead of the scene's (which defaults to ``zsobol``).
     Each of the scene's warnings is issued as a :class:`RenderWarning` (and listed in ``stats.warnings``).
     ``cluster``: render on Ray (a :class:`renderer.cluster.Cluster`, or an address: "local", "auto",

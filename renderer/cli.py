@@ -118,8 +118,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="as pbrt-v4: a quarter of the resolution and 1 spp")
     p.add_argument("--sampler", choices=list(RANDOMIZATIONS), help="pbrt-v4 sampler instead of the scene's "
                    f"(default: the scene's Sampler, else {DEFAULT_SAMPLER})")
-    p.add_argument("--thin-film", metavar="MODE", help="thinfilm colour: rgb3 (the seed's 3 wavelengths) or "
-                   "spectral:N (N jittered wavelengths; default spectral:32)")
+    p.add_argument("--thin-film", metavar="MODE", help="thinfilm colour: rgb3 (the seed's 3 wavelengths), "
+                   "spectral:N (N jittered wavelengths; default spectral:32) or table[:N] (per-material tables "
+                   "over the angle from the 1 nm reference; spectral:N, default 32, for textured coatings)")
     g = p.add_argument_group("long renders")
     g.add_argument("--time-limit", type=float, metavar="SECONDS", help="stop after the pass that crosses this")
     g.add_argument("--checkpoint", type=Path, metavar="PATH", help="write the accumulation here (atomically)")

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any, Iterable
 
 import numpy as np
 
+from renderer.color.named_spectra import SpectralRGB
 from renderer.errors import Location, SceneError
 
 if TYPE_CHECKING:   # only annotations: importing the scene package here would make import order matter
@@ -101,6 +102,8 @@ class Parameter:
             if float(a.ravel()[0]) != math.floor(float(a.ravel()[0])):
                 raise SceneError(f'{owner}: parameter "{self.name}" must be an integer, got {value!r}', loc)
             return int(a.ravel()[0])
+        if isinstance(value, SpectralRGB) and self.type == "rgb":
+            return SpectralRGB((float(x) for x in a), value.samples)     # the spectrum travels with its RGB
         return tuple(float(x) for x in a) if self.type in ("rgb", "point3", "floats", "points3") else float(a.ravel()[0])
 
     def read(self, ps: ParamSet, owner: str) -> Any:
@@ -117,6 +120,9 @@ class Parameter:
             v = ps.float(self.name)
         elif self.type == "rgb":
             v = tuple(ps.rgb(self.name))
+            samples = ps.spectrum_samples(self.name)
+            if samples is not None:
+                v = SpectralRGB(v, samples)
         elif self.type == "bool":
             v = ps.bool(self.name)
         elif self.type == "int":

@@ -105,7 +105,7 @@ class RenderSession:
         wp.load_module(self.kernel.module, device=device)
         own = [w] if (w := settings.sampler.warning()) else []
         self.stats = RenderStats(width=W, height=H, compile_seconds=time.perf_counter() - t0,
-                                 warnings=list(dict.fromkeys(scene.warnings + own)))   # each once
+                                 warnings=list(dict.fromkeys(scene.warnings + self.ds.warnings + own)))   # each once
         self.threads = max(1, min(threads or default_threads(device), H))
         self.chunks = row_chunks(H, self.threads)
         self._fingerprint: str | None = None

@@ -36,7 +36,8 @@ def check_resolution(width: int, height: int) -> None:
 
 
 def thin_film_samples(mode: str) -> int:
-    """Wavelengths per thin-film evaluation in a render: ``rgb3`` → 0, ``spectral:N`` → N."""
+    """Wavelengths per thin-film evaluation in a render: ``rgb3`` → 0, ``spectral:N`` → N,
+    ``table:N`` → N (for the materials no table describes)."""
     kind, n = parse_mode(mode)
     if kind == "reference":
         raise ValueError("the thin-film mode 'reference' is for optics tools, not renders: use 'spectral:N'")
@@ -53,7 +54,7 @@ class RenderSettings:
     max_depth: int
     nee: bool = True
     rr_depth: int = RR_DEPTH            # Russian roulette from this depth on; negative: never
-    thin_film: str = THIN_FILM_MODE     # thin-film colour mode: rgb3 or spectral:N
+    thin_film: str = THIN_FILM_MODE     # thin-film colour mode: rgb3, spectral:N or table[:N]
     sampler: SamplerSpec = SamplerSpec()
 
     def __post_init__(self) -> None:

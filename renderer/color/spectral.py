@@ -97,16 +97,25 @@ def _cumulative_rgb_weight(wavelengths_nm: np.ndarray) -> np.ndarray:
 MAX_SPECTRAL_SAMPLES = 1024
 
 
+#: Wavelengths per evaluation of ``table`` for the materials a table cannot describe.
+TABLE_FALLBACK_SAMPLES = 32
+
+
 def parse_mode(mode: str) -> tuple[str, int]:
     """The one parser of thin-film colour modes: ``rgb3`` → ("rgb3", 0), ``spectral:N`` →
-    ("spectral", N) with 1 <= N <= MAX_SPECTRAL_SAMPLES, ``reference`` → ("reference", 0)."""
+    ("spectral", N) with 1 <= N <= MAX_SPECTRAL_SAMPLES, ``reference`` → ("reference", 0),
+    ``table`` / ``table:N`` → ("table", N): per-material tables over the angle baked from the
+    1 nm reference (:mod:`renderer.optics.angular_table`), spectral:N (default 32) where a
+    material's coating is textured and no table describes it."""
     if mode in ("rgb3", "reference"):
         return mode, 0
+    if mode == "table":
+        return mode, TABLE_FALLBACK_SAMPLES
     name, _, count = mode.partition(":")
-    if name == "spectral" and count.isdigit() and 1 <= int(count) <= MAX_SPECTRAL_SAMPLES:
+    if name in ("spectral", "table") and count.isdigit() and 1 <= int(count) <= MAX_SPECTRAL_SAMPLES:
         return name, int(count)
     raise ValueError(f"unknown thin-film mode {mode!r}: use 'rgb3', 'spectral:N' (1 <= N <= "
-                     f"{MAX_SPECTRAL_SAMPLES}) or 'reference'")
+                     f"{MAX_SPECTRAL_SAMPLES}), 'table', 'table:N' or 'reference'")
 
 
 def mode_wavelengths(mode: str) -> tuple[np.ndarray, np.ndarray, float]:
@@ -129,7 +138,9 @@ def mode_wavelengths(mode: str) -> tuple[np.ndarray, np.ndarray, float]:
         q = np.full_like(lam, TABLE_STEP_NM)
         q[[0, -1]] *= 0.5
         return lam, spectrum_to_rgb_weights(lam, q), TABLE_STEP_NM
-    _, n = parse_mode(mode)
+    kind, n = parse_mode(mode)
+    if kind == "table":
+        raise ValueError("the thin-film mode 'table' is a render mode: its tables are the 'reference' quadrature")
     step = span / n
     edges = LAMBDA_MIN_NM + np.arange(n + 1) * step
     cumulative = _cumulative_rgb_weight(edges)

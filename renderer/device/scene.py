@@ -57,6 +57,7 @@ class DeviceScene:
     height: int
     keep: list = field(default_factory=list)     # every Warp object the struct points into
     geometry: GeometryData | None = None
+    warnings: list[str] = field(default_factory=list)   # the upload's own (a table the thin-film mode could not bake)
 
 
 def _spectral_table(needed: bool, thin_film: str, device: str) -> tuple[RgbWeightTable, int]:
@@ -90,7 +91,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     if not desc.instance_sets:
         raise SceneError("the scene contains no shapes", None)
     table = TextureTable()
-    mats, mat_keep, used = build_materials(desc.materials, desc.textures, table, device)
+    mats, mat_keep, used, warnings = build_materials(desc.materials, desc.textures, table, device, thin_film)
 
     inst_mesh_a, inst_shape_a, xform_a = flatten_instances(desc)
 
@@ -131,7 +132,8 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     )
     keep = [geo, mat_keep, tex_keep, light_keep, cam_keep, S.shape_material, S.shape_light, S.shape_flip,
             S.shape_alpha, S.spectral.w]
-    return DeviceScene(struct=S, features=feats, device=device, width=width, height=height, keep=keep, geometry=geo)
+    return DeviceScene(struct=S, features=feats, device=device, width=width, height=height, keep=keep, geometry=geo,
+                       warnings=warnings)
 
 
 def shape_alpha_ids(desc: SceneDescription, table: TextureTable) -> np.ndarray:

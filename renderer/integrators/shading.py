@@ -50,6 +50,7 @@ def load_bsdf(mat: Materials, tex: Textures, spectral: RgbWeightTable, spectral_
     b.layers = mat.layers
     b.layer_first = mat.layer_first[m]
     b.layer_count = mat.layer_count[m]
+    b.table_first = mat.table_first[m]
     return b
 
 

@@ -4,8 +4,10 @@ A material is a module with ``NAME``, ``PARAMS`` (its named parameters, pbrt-v4'
 defaults: :class:`renderer.parameters.Parameters`), the Warp functions ``eval_pdf`` and ``sample``
 (see :mod:`renderer.materials.bsdf`) and, where some values derive from others, an optional
 ``resolve(values, loc) -> (values, extra flag bits)``, and where it has per-layer data, an optional
-``layer_rows(values, loc) -> (n, 4) array`` for the scene's layer table. Registering the module in ``REGISTRY`` is
-all it takes to add one: parsing, validation, the device layout and the docs table follow from
+``layer_rows(values, loc) -> (n, 4) array`` for the scene's layer table, and where it bakes a
+table over the angle of incidence (:mod:`renderer.optics.angular_table`), an optional
+``table_rows(values, loc, thin_film) -> ((n, 4) array, warning)`` (no rows: no table).
+Registering the module in ``REGISTRY`` is all it takes to add one: parsing, validation, the device layout and the docs table follow from
 ``PARAMS``, and kernels are specialised to the materials a scene uses.
 """
 from __future__ import annotations
@@ -23,6 +25,7 @@ from renderer.materials.bsdf import FIRST_DERIVED_FLAG, MAX_SLOTS
 from renderer.parameters import Parameter, Parameters, TextureRef
 from renderer.scene.description import MaterialDesc, TextureDesc
 from renderer.scene.params import ParamSet
+from renderer.settings import THIN_FILM_MODE
 from renderer.textures import TextureTable
 
 #: The largest float32: the bound of a slot whose parameter declares none.
@@ -132,6 +135,7 @@ class Materials:
     layers: wp.array(dtype=wp.vec4)     # every material's layer rows (renderer.materials.stack; 1 dummy row if none)
     layer_first: wp.array(dtype=int)    # a material's first row in layers
     layer_count: wp.array(dtype=int)    # and its number of rows (0: no stack)
+    table_first: wp.array(dtype=int)    # a material's baked table over the angle in layers (0: none; row 0 is a dummy)
     bounds: wp.array2d(dtype=wp.vec2)   # (n_materials, MAX_SLOTS) each slot's declared [lo, hi]: textures are
                                         # clamped to it as pbrt clamps (a reflectance texture of 100 reflects 1)
     mix: wp.array(dtype=wp.vec3i)       # a mix's (first, second material, amount texture id)
@@ -156,11 +160,20 @@ def _texture_id(p: Parameter, v: Any, table: TextureTable, textures: dict[str, T
     return table.add_constant(v)
 
 
+def _append_rows(rows: list[np.ndarray], mine: np.ndarray) -> int:
+    """Appends a material's rows to the layer table; returns the index of the first."""
+    first = sum(len(r) for r in rows)
+    rows.append(np.asarray(mine, np.float32).reshape(-1, 4))
+    return first
+
+
 def build_materials(descs: list[MaterialDesc], textures: dict[str, TextureDesc], table: TextureTable,
-                    device: str) -> tuple[Materials, list, set[str]]:
+                    device: str, thin_film: str = THIN_FILM_MODE) -> tuple[Materials, list, set[str], list[str]]:
     """The device table: per material one texture id per slot parameter (constants included),
-    its flags and bump map. Returns the table, the arrays that back it (keep them alive) and the
-    set of material types in use (for kernel specialisation)."""
+    its flags and bump map, its layers and baked tables (``thin_film``: the render's colour mode).
+    Returns the table, the arrays that back it (keep them alive), the set of material types in
+    use (for kernel specialisation) and the warnings of the bakes (one per material a table
+    could not describe)."""
     n = max(1, len(descs))
     kinds = np.zeros(n, dtype=np.int32)
     slot_ids = -np.ones((n, MAX_SLOTS), dtype=np.int32)
@@ -168,20 +181,27 @@ def build_materials(descs: list[MaterialDesc], textures: dict[str, TextureDesc],
     bump = -np.ones(n, dtype=np.int32)
     first = np.zeros(n, dtype=np.int32)
     count = np.zeros(n, dtype=np.int32)
+    tables = np.zeros(n, dtype=np.int32)
     rows = [np.zeros((1, 4), np.float32)]
-    n_rows = 1
+    warnings: list[str] = []
     bounds = np.tile(np.array([-FLOAT_MAX, FLOAT_MAX], np.float32), (n, MAX_SLOTS, 1))
     mix = mix_table(descs, table, textures)
     for i, d in enumerate(descs):
         if d.kind in selection.PARAMS:
             kinds[i] = selection.MIX_KIND if d.kind == selection.MIX else selection.INTERFACE_KIND
             continue
-        rows_of = getattr(module_of(d.kind, d.loc), "layer_rows", None)
+        module = module_of(d.kind, d.loc)
+        rows_of = getattr(module, "layer_rows", None)
         if rows_of is not None:
             mine = rows_of(resolve(d)[0], d.loc)
-            first[i], count[i] = n_rows, len(mine)
-            rows.append(mine)
-            n_rows += len(mine)
+            first[i], count[i] = _append_rows(rows, mine), len(mine)
+        table_of = getattr(module, "table_rows", None)
+        if table_of is not None:
+            baked, warning = table_of(resolve(d)[0], d.loc, thin_film)
+            if len(baked):
+                tables[i] = _append_rows(rows, baked)
+            if warning:
+                warnings.append(f"{d.loc}: {warning}" if d.loc else warning)
         layout, flags[i] = device_layout(d)
         for j, (p, v) in enumerate(layout):
             slot_ids[i, j] = _texture_id(p, v, table, textures, d.loc)
@@ -196,10 +216,11 @@ def build_materials(descs: list[MaterialDesc], textures: dict[str, TextureDesc],
     M.layers = wp.array(np.concatenate(rows), dtype=wp.vec4, device=device)
     M.layer_first = wp.array(first, dtype=int, device=device)
     M.layer_count = wp.array(count, dtype=int, device=device)
+    M.table_first = wp.array(tables, dtype=int, device=device)
     M.bounds = wp.array(bounds, dtype=wp.vec2, device=device)
     M.mix = wp.array(mix, dtype=wp.vec3i, device=device)
-    keep = [M.kind, M.slots, M.flags, M.bump, M.layers, M.layer_first, M.layer_count, M.bounds, M.mix]
-    return M, keep, {d.kind for d in descs} - set(selection.PARAMS)
+    keep = [M.kind, M.slots, M.flags, M.bump, M.layers, M.layer_first, M.layer_count, M.table_first, M.bounds, M.mix]
+    return M, keep, {d.kind for d in descs} - set(selection.PARAMS), warnings
 
 
 def mix_table(descs: list[MaterialDesc], table: TextureTable, textures: dict[str, TextureDesc]) -> np.ndarray:

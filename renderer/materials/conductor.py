@@ -1,18 +1,31 @@
 """pbrt's ``conductor``: a metal with complex index eta + i k (or an artist ``reflectance``),
-smooth (a mirror) or rough (GGX). Two-sided."""
+smooth (a mirror) or rough (GGX). Two-sided.
+
+Spectral eta and k (pbrt-v4's named spectra such as ``metal-Au-eta``, inline samples, ``.spd``
+files): the Fresnel term is a table over the angle of incidence baked at upload from the
+per-wavelength Fresnel reflectance, integrated at every nm of 360–830 nm against the CIE observer
+under D65 (:mod:`renderer.optics.angular_table`), the convention the renderer uses for every
+reflectance. The RGB projections of eta and k put into the per-channel Fresnel formula instead
+are not the RGB of the reflectance (the formula is not linear): gold's red came out 6 % low
+against pbrt-v4. A spectrum beside an RGB colour that is not grey (the one cannot be put at the
+other's wavelengths), a texture, or an artist ``reflectance`` keep the per-channel formula."""
 from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 import warp as wp
 
+from renderer.color.named_spectra import SpectralRGB
+from renderer.color.spectral import mode_wavelengths
 from renderer.errors import Location
 from renderer.materials.bsdf import (BSDF, FIRST_DERIVED_FLAG, GLOSSY, REFLECTION, SPECULAR, BSDFEval, BSDFSample,
                                      delta_sample, failed_sample, reflect_z, same_hemisphere, sampled, signed_z)
 from renderer.materials.microfacet import (ROUGHNESS_PARAMS, ggx_D, ggx_G, ggx_sample_visible, ggx_visible_pdf,
                                            is_smooth, resolve_roughness, roughness_to_alpha)
+from renderer.optics.angular_table import conductor_table, table_locate, table_value
 from renderer.optics.fresnel import fresnel_conductor
-from renderer.parameters import Parameter, Parameters
+from renderer.parameters import Parameter, Parameters, TextureRef
 
 NAME = "conductor"
 
@@ -38,6 +51,39 @@ def resolve(values: dict[str, Any], loc: Location | None) -> tuple[dict[str, Any
     return resolve_roughness(values), ARTIST if "reflectance" in values else 0
 
 
+def _on_grid(v: Any, lam: np.ndarray) -> np.ndarray | None:
+    """A parameter's value at every wavelength of lam: its spectrum, or its grey constant; None
+    for a texture or a colour that is not grey."""
+    if isinstance(v, SpectralRGB):
+        return v.on_grid(lam)
+    rgb = np.asarray(v, np.float64)
+    return np.full(lam.shape, rgb[0]) if np.all(rgb == rgb[0]) else None
+
+
+def table_rows(values: dict[str, Any], loc: Location | None, thin_film: str) -> tuple[np.ndarray, str]:
+    """The spectral Fresnel table of a conductor whose eta or k is a spectrum (see the module
+    docstring); no rows otherwise. The thin-film mode does not matter: a table is exact here."""
+    eta, k = PARAMS.value(values, "eta"), PARAMS.value(values, "k")
+    if "reflectance" in values or not (isinstance(eta, SpectralRGB) or isinstance(k, SpectralRGB)):
+        return np.zeros((0, 4), np.float32), ""
+    if isinstance(eta, TextureRef) or isinstance(k, TextureRef):
+        return np.zeros((0, 4), np.float32), ""
+    lam = mode_wavelengths("reference")[0]
+    eta_l, k_l = _on_grid(eta, lam), _on_grid(k, lam)
+    if eta_l is None or k_l is None:
+        return np.zeros((0, 4), np.float32), ('conductor: a spectrum beside a non-grey RGB colour (eta, k) '
+                                              'keeps the per-channel Fresnel of their RGB projections')
+    return conductor_table(eta_l, k_l), ""
+
+
+@wp.func
+def conductor_fresnel(cos_i: float, eta: wp.vec3, k: wp.vec3, rows: wp.array(dtype=wp.vec4), table: int) -> wp.vec3:
+    """RGB Fresnel reflectance: the baked spectral table at rows[table] when table > 0, else per channel."""
+    if table > 0:
+        return table_value(rows, table, 1, 0, table_locate(rows, table, cos_i))
+    return fresnel_conductor(cos_i, eta, k)
+
+
 @wp.func
 def _alpha(b: BSDF) -> wp.vec2:
     return roughness_to_alpha(wp.vec2(b.p[SLOT.uroughness][0], b.p[SLOT.vroughness][0]),
@@ -52,8 +98,10 @@ def artist_k(r: wp.vec3) -> wp.vec3:
 
 
 @wp.func
-def conductor_eval(eta: wp.vec3, k: wp.vec3, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
-    """The rough conductor lobe (two-sided) of complex relative index eta + i k."""
+def conductor_eval(eta: wp.vec3, k: wp.vec3, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3,
+                   rows: wp.array(dtype=wp.vec4), table: int) -> BSDFEval:
+    """The rough conductor lobe (two-sided) of complex relative index eta + i k (or the spectral
+    Fresnel table at rows[table], table > 0)."""
     e = BSDFEval()
     if is_smooth(alpha) or not same_hemisphere(wo, wi):
         return e
@@ -61,16 +109,18 @@ def conductor_eval(eta: wp.vec3, k: wp.vec3, alpha: wp.vec2, wo: wp.vec3, wi: wp
     o = signed_z(wo, sgn)
     i = signed_z(wi, sgn)
     wm = wp.normalize(o + i)
-    e.f = fresnel_conductor(wp.dot(o, wm), eta, k) * (ggx_D(wm, alpha) * ggx_G(o, i, alpha) / (4.0 * o[2] * i[2]))
+    g = ggx_D(wm, alpha) * ggx_G(o, i, alpha) / (4.0 * o[2] * i[2])
+    e.f = conductor_fresnel(wp.dot(o, wm), eta, k, rows, table) * g
     e.pdf = ggx_visible_pdf(o, wm, alpha) / (4.0 * wp.abs(wp.dot(o, wm)))
     return e
 
 
 @wp.func
-def conductor_sample(eta: wp.vec3, k: wp.vec3, alpha: wp.vec2, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+def conductor_sample(eta: wp.vec3, k: wp.vec3, alpha: wp.vec2, wo: wp.vec3, u: wp.vec3,
+                     rows: wp.array(dtype=wp.vec4), table: int) -> BSDFSample:
     """A mirror direction (smooth) or a GGX visible-normal reflection (rough)."""
     if is_smooth(alpha):
-        return delta_sample(reflect_z(wo), fresnel_conductor(wo[2], eta, k), 1.0, REFLECTION | SPECULAR)
+        return delta_sample(reflect_z(wo), conductor_fresnel(wo[2], eta, k, rows, table), 1.0, REFLECTION | SPECULAR)
     sgn = wp.where(wo[2] < 0.0, -1.0, 1.0)
     o = signed_z(wo, sgn)
     wm = ggx_sample_visible(o, alpha, wp.vec2(u[0], u[1]))
@@ -78,7 +128,7 @@ def conductor_sample(eta: wp.vec3, k: wp.vec3, alpha: wp.vec2, wo: wp.vec3, u: w
     if i[2] <= 0.0:
         return failed_sample()
     wi = signed_z(i, sgn)
-    return sampled(wo, wi, conductor_eval(eta, k, alpha, wo, wi), GLOSSY)
+    return sampled(wo, wi, conductor_eval(eta, k, alpha, wo, wi, rows, table), GLOSSY)
 
 
 @wp.func
@@ -95,9 +145,9 @@ def _k(b: BSDF) -> wp.vec3:
 
 @wp.func
 def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
-    return conductor_eval(_eta(b), _k(b), _alpha(b), wo, wi)
+    return conductor_eval(_eta(b), _k(b), _alpha(b), wo, wi, b.layers, b.table_first)
 
 
 @wp.func
 def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
-    return conductor_sample(_eta(b), _k(b), _alpha(b), wo, u)
+    return conductor_sample(_eta(b), _k(b), _alpha(b), wo, u, b.layers, b.table_first)

@@ -128,7 +128,7 @@ def iface_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: boo
     if s.kind == LAMBERT:
         e = lambert_eval(s.albedo, wo, wi)
     else:
-        e = conductor_eval(s.eta, s.k, s.alpha, wo, wi)
+        e = conductor_eval(s.eta, s.k, s.alpha, wo, wi, s.coat.layers, 0)
     return e
 
 
@@ -143,7 +143,7 @@ def iface_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bo
         return failed_sample()
     if s.kind == LAMBERT:
         return lambert_sample(s.albedo, wo, u)
-    return conductor_sample(s.eta, s.k, s.alpha, wo, u)
+    return conductor_sample(s.eta, s.k, s.alpha, wo, u, s.coat.layers, 0)
 
 
 @wp.func

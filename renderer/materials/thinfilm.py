@@ -44,6 +44,7 @@ from renderer.materials.bsdf import (BSDF, DIFFUSE, GLOSSY, REFLECTION, SPECULAR
                                      sampled, signed_z)
 from renderer.materials.coating import (BOTH_SIDES, Coating, coating_eval, coating_rgb, coating_sample,
                                         glossy_reflection, mean3)
+from renderer.materials.coating_table import coating_table
 from renderer.materials.layered import (FILM, LAMBERT, SLAB_PARAMS, Interface, Slab, layered_eval_pdf,
                                         layered_sample, make_slab, walk_flags)
 from renderer.materials.microfacet import (ROUGHNESS_PARAMS, ggx_sample_visible, is_smooth, resolve_roughness,
@@ -101,6 +102,11 @@ def layer_rows(values: dict[str, Any], loc: Location | None) -> np.ndarray:
     return stack_rows(values, loc)
 
 
+def table_rows(values: dict[str, Any], loc: Location | None, thin_film: str) -> tuple[np.ndarray, str]:
+    """The coating's baked RGB (R, T) table in the thin-film mode ``table`` (:mod:`.coating_table`)."""
+    return coating_table(values, PARAMS, loc, thin_film, bool(values.get("transmission") or values.get("layered")))
+
+
 @wp.func
 def _transmissive(b: BSDF) -> bool:
     return (b.flags & FLAG.transmission) != 0
@@ -122,13 +128,14 @@ def film_coating(b: BSDF) -> Coating:
     c.d = wp.max(b.p[SLOT.thickness][0] + b.p[SLOT.thicknessscale][0] * b.p[SLOT.thicknessmap][0], 0.0)
     c.total = b.p[SLOT.thickness][0]
     c.clear = _transmissive(b) or _layered(b)
-    c.balanced = _layered(b)
+    c.balanced = c.clear       # many crossings (a clear substrate, the layered walk): see coating.py
     c.layers = b.layers
     c.layer_first = b.layer_first
     c.layer_count = b.layer_count
     c.spectral_n = b.spectral_n
     c.wavelength_u = b.wavelength_u
     c.spectral = b.spectral
+    c.table_first = b.table_first
     return c
 
 

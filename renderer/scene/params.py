@@ -174,6 +174,14 @@ class ParamSet:
             raise SceneError(f'parameter "{name}" contains NaN or infinite values', p.loc)
         return v
 
+    def spectrum_samples(self, name: str) -> np.ndarray | None:
+        """The (N, 2) samples of a parameter given as a non-constant spectrum (named, inline or a
+        file), else None: what a material that works per wavelength reads beside its RGB."""
+        p = self.get(name)
+        if p is None or p.type != "spectrum" or (len(p.values) == 1 and not isinstance(p.values[0], str)):
+            return None
+        return self._spectrum(p)
+
     def rgb_or_texture(self, name: str, default: Any = None) -> np.ndarray | str | None:
         """A colour that may also name a texture (returned as the texture's name)."""
         p = self.params.get(name)
