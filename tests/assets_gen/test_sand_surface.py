@@ -32,11 +32,11 @@ def digest(path: Path) -> str:
 
 @pytest.fixture(scope="module")
 def built(tmp_path_factory) -> Path:
-    """Dunes (flat interdune in front of the camera), ripples as a map, the near field, a box
-    rested and a shell-like ellipsoid buried with its imprint."""
+    """Dunes (flat interdune in front of the camera: crests at x = 4 + 10k m), ripples as a map,
+    the near field, a box rested and a shell-like ellipsoid buried with its imprint."""
     root = tmp_path_factory.mktemp("sand")
     assert run("dunes", "--size-x", 12, "--size-z", 8, "--spacing", 0.1, "--dune-height", 0.5,
-               "--dune-wavelength", 10, "--seed", 0, "--out", root / "dunes", "--no-preview") == 0
+               "--dune-wavelength", 10, "--crest-x", 4, "--seed", 0, "--out", root / "dunes", "--no-preview") == 0
     assert run("ripples", "--dunes", root / "dunes" / "dunes_height.exr", "--coverage", 1.0, "--defect-density", 0,
                "--seed", 1, "--out", root / "ripples", "--no-preview") == 0
     (root / "cam.pbrt").write_text(CAMERA)
