@@ -8,7 +8,7 @@
 is there. `measure` reads that EXR and prints, per region found through the material AOV, what the
 beach issue asks to be measured: the lens pixels' mean reflectance (albedo AOV luminance) and CIELAB
 chroma, the nacre pixels' hue spread, and the number of distinct grain instances seen in the
-foreground crop; it also writes the full frame and 100 % crops (noisy beside denoised) as PNGs.
+in-focus sand crop below the lenses; it also writes the full frame and 100 % crops (noisy beside denoised) as PNGs.
 """
 from __future__ import annotations
 
@@ -107,13 +107,14 @@ def measure(exr: Path, lens: str, nacre: str, grains: str, images: Path) -> None
         sd, rng = _hue_spread(_lab(np.clip(img[nacre_m], 0.0, None)))
         print(f"| nacre ({nacre}) | {nacre_m.sum()} | hue circular s.d. {sd:.1f} deg, 5-95 % range {rng:.1f} deg |")
     grain_m = _mask(material, names, grains)
-    fg = np.zeros_like(grain_m)
-    fg[2 * h // 3:, :] = True                     # the foreground: the frame's lowest third
+    fg = np.zeros_like(grain_m)   # the sand in focus: just below the lenses (the focus distance), else the lowest third
+    below = int(np.nonzero(lens_m)[0].max()) if lens_m.any() else 2 * h // 3
+    fg[below:below + CROP, :] = True
     box = _crop_box(grain_m & fg, CROP)
     if box is not None:
         seen = instance[box][grain_m[box]]
         ids, counts = np.unique(seen, return_counts=True)
-        print(f"| grains ({grains}), {CROP}x{CROP} foreground crop | {int(grain_m[box].sum())} | "
+        print(f"| grains ({grains}), {CROP}x{CROP} in-focus crop below the lenses | {int(grain_m[box].sum())} | "
               f"{len(ids)} distinct grain instances seen, {int((counts >= 4).sum())} of them over 4 pixels |")
     images.mkdir(parents=True, exist_ok=True)
     write_png(images / "beach_final.png", img)

@@ -6,11 +6,14 @@ compare chains in the hot traversal and shading code. The NaN guards keep workin
 ``wp.isfinite`` and the NaN tests the kernels rely on are checked by tests (a NaN sample is still
 dropped and counted). CUDA code is unaffected: the flag only reaches the CPU compiler. Clang then
 warns about every NaN constant in Warp's own headers (``-Wnan-infinity-disabled``); those are
-Warp's identities and out-of-range returns, not our code, so that one warning is turned off."""
+Warp's identities and out-of-range returns, not our code, so that one warning is turned off. So
+is ``-Wconstant-conversion``: Warp writes every integer literal as a ``const wp::int32`` before
+our ``wp.uint32(...)`` cast, so a 32-bit hash constant above 2^31 (0x9E3779B9) is narrowed to the
+same bits, which the cast restores. Warning flags do not change the generated code."""
 from __future__ import annotations
 
 from typing import Any
 
 #: ``module_options`` for the render kernels: no backward pass (nothing differentiates them; it
 #: doubled the generated code) and the host compiler flags above on top of Warp's default.
-KERNEL_OPTIONS: dict[str, Any] = {"enable_backward": False, "cpu_compiler_flags": "-march=native -menable-no-nans -Wno-nan-infinity-disabled"}
+KERNEL_OPTIONS: dict[str, Any] = {"enable_backward": False, "cpu_compiler_flags": "-march=native -menable-no-nans -Wno-nan-infinity-disabled -Wno-constant-conversion"}
