@@ -32,9 +32,9 @@ from renderer.scene.texture_params import check_depth, read_texture
 from renderer.sampling.sampler_spec import DEFAULT_SAMPLER, RANDOMIZATIONS
 from renderer.settings import sampler_spec
 from renderer.scene.upgrade import upgraded
-from renderer.scene.transform import (check_single_precision, from_pbrt_matrix, inverse, look_at,
-                                      read_instance_transforms, rotate, scale, swaps_handedness, transformed_mesh,
-                                      translate)
+from renderer.scene.transform import (check_single_precision, inverse, read_instance_transforms, swaps_handedness,
+                                      transformed_mesh)
+from renderer.scene.transform_directives import TransformDirectives
 
 #: Shapes we build, each from its parameters and the Shape directive's location.
 SHAPES: dict[str, Callable[[ParamSet, Location], MeshDesc]] = {
@@ -42,7 +42,7 @@ SHAPES: dict[str, Callable[[ParamSet, Location], MeshDesc]] = {
     "bilinearmesh": bilinear_mesh, "loopsubdiv": loop_subdivision_surface}
 
 
-class Builder:
+class Builder(TransformDirectives):
     """Consumes directives one by one; one method per directive, named as the directive, except
     the ones UNSUPPORTED ignores outright."""
 
@@ -143,56 +143,6 @@ class Builder:
         """Earlier copies of a parameter given twice (pbrt-v4 uses the last)."""
         for p in params.shadowed:
             self.warn(p.loc, f'{what}: parameter "{p.name}" is given again later; the later value is used (as pbrt-v4)')
-
-    # -- transforms
-
-    def _set_ctm(self, m: np.ndarray) -> None:
-        """Only the shutter-open transform is kept (motion blur is not implemented)."""
-        if self.state.shutter_open_active:
-            self.state.ctm = m
-
-    def _concat(self, m: np.ndarray) -> None:
-        with np.errstate(over="ignore", invalid="ignore"):     # an overflow is refused where the CTM is used
-            self._set_ctm(self.state.ctm @ m)
-
-    def Identity(self, d: Directive) -> None:
-        self._set_ctm(np.eye(4))
-
-    def Translate(self, d: Directive) -> None:
-        self._concat(translate(np.asarray(d.args)))
-
-    def Scale(self, d: Directive) -> None:
-        self._concat(scale(np.asarray(d.args)))
-
-    def Rotate(self, d: Directive) -> None:
-        self._concat(rotate(float(d.args[0]), np.asarray(d.args[1:]), d.loc))
-
-    def LookAt(self, d: Directive) -> None:
-        eye, target, up = np.asarray(d.args, dtype=np.float64).reshape(3, 3)
-        self._concat(look_at(eye, target, up, d.loc))
-
-    def ConcatTransform(self, d: Directive) -> None:
-        self._concat(from_pbrt_matrix(d.args))
-
-    def Transform(self, d: Directive) -> None:
-        self._set_ctm(from_pbrt_matrix(d.args))
-
-    def CoordinateSystem(self, d: Directive) -> None:
-        self.named_coordinate_systems[str(d.args[0])] = self.state.ctm
-
-    def CoordSysTransform(self, d: Directive) -> None:
-        name = str(d.args[0])
-        if name not in self.named_coordinate_systems:
-            self.warn(d.loc, f'CoordSysTransform: no coordinate system named "{name}"; ignored (as pbrt does)')
-        else:
-            self._set_ctm(self.named_coordinate_systems[name])
-
-    def ActiveTransform(self, d: Directive) -> None:
-        which = str(d.args[0])
-        if which not in ("StartTime", "EndTime", "All"):
-            raise SceneError(f'ActiveTransform expects StartTime, EndTime or All, not "{which}"', d.loc)
-        self.unsupported(d.name, "*", d.loc)
-        self.state.shutter_open_active = which != "EndTime"
 
     # -- rendering options
 
