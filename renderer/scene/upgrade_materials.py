@@ -9,9 +9,9 @@ dropped, as --upgrade drops it, and the warning says whether the image can diffe
 ``color`` type, scale ``tex1``/``tex2``, imagemap ``trilinear`` and ``gamma``. What --upgrade
 refuses (a non-opaque uber, a non-grey scale factor, ...) is a located SceneError.
 
-Not rewritten: pbrt-v3's ``disney``, which --upgrade makes a diffuse, because this renderer has a
-``disney`` material of its own; and --upgrade's renaming of textures and named materials defined
-twice (pbrt-v4 refuses a second definition, and so does this renderer).
+Not rewritten: pbrt-v3's ``disney``, which --upgrade makes a diffuse, because this renderer reads
+it as pbrt-v3 defines it (docs/disney.md); and --upgrade's renaming of textures and named
+materials defined twice (pbrt-v4 refuses a second definition, and so does this renderer).
 """
 from __future__ import annotations
 
@@ -68,11 +68,10 @@ def _index(d: Directive) -> Param | None:
 def _coated(d: Directive, warn: Warn) -> str:
     """uber and plastic: a coateddiffuse, or a diffuse where the specular ``Ks`` is black (the
     coat's float ``roughness`` and ``eta`` go too)."""
+    rename_param(d, "Kd", "reflectance", warn)
     if _drop_unless(d, "Ks", 0.0, warn):
         drop(d, ("eta", "roughness"), warn, ("float",))
-        rename_param(d, "Kd", "reflectance", warn)
         return "diffuse"
-    rename_param(d, "Kd", "reflectance", warn)
     return "coateddiffuse"
 
 
@@ -172,7 +171,8 @@ def _mix(d: Directive, warn: Warn) -> str:
     names = [str(second.values[0]), str(first.values[0])]
     add_param(d, "string", "materials", names)
     warn(first.loc, f'{what(d)}: "namedmaterial1"/"namedmaterial2" are pbrt-v3\'s; read as --upgrade writes '
-                    f'them, "string materials" ["{names[0]}" "{names[1]}"] (pbrt-v4 weights the second by "amount", pbrt-v3 the first)')
+                    f'them, "string materials" ["{names[0]}" "{names[1]}"] (pbrt-v4 weights the second by '
+                    f'"amount", pbrt-v3 the first)')
     return "mix"
 
 
@@ -230,7 +230,8 @@ def _scale_inputs(d: Directive, warn: Warn) -> None:
         rgb_seen = True
         del d.params.params[p.name]
         d.params.params["scale"] = Param("float", "scale", [float(p.values[0])], p.loc)
-        warn(p.loc, f'{what(d)}: "rgb {p.name}" is pbrt-v3\'s; read as --upgrade writes it, "float scale" {p.values[0]}')
+        warn(p.loc, f'{what(d)}: "rgb {p.name}" is pbrt-v3\'s; read as --upgrade writes it, '
+                    f'"float scale" {p.values[0]}')
 
 
 def _image_options(d: Directive, warn: Warn) -> None:
@@ -253,7 +254,8 @@ def _image_options(d: Directive, warn: Warn) -> None:
         return
     del ps["gamma"]
     add_param(d, "string", "encoding", [encoding])
-    warn(gamma.loc, f'{what(d)}: "{gamma.type} gamma" is pbrt-v3\'s; read as "string encoding" "{ps["encoding"].values[0]}"')
+    warn(gamma.loc, f'{what(d)}: "{gamma.type} gamma" is pbrt-v3\'s; read as "string encoding" '
+                    f'"{ps["encoding"].values[0]}"')
 
 
 def _texture(d: Directive, warn: Warn) -> Directive:
