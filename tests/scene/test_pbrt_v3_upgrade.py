@@ -45,10 +45,26 @@ def test_each_upgraded_construct_is_warned_at_its_line():
     assert all("pbrt-v3" in w for ws in warned.values() for w in ws)
 
 
-@pytest.mark.parametrize("params", ['"rgb scale" [1 2 3]', '"string mapname" "sky.png" "rgb L" [1 0.5 0.5]'])
-def test_what_upgrade_cannot_convert_is_a_located_error(tmp_path, params):
+@pytest.mark.parametrize("directive, message", [
+    ('LightSource "infinite" "rgb scale" [1 2 3]', "only converts a grey rgb"),
+    ('LightSource "infinite" "string mapname" "sky.png" "rgb L" [1 0.5 0.5]', "only converts a grey rgb"),
+    # materials and textures (renderer.scene.upgrade_materials): --upgrade's "Please manually edit the file"
+    ('Texture "s" "color" "scale" "color tex1" [0.5 0.6 0.5] "texture tex2" "t"', "not a grey"),
+    ('Texture "s" "color" "scale" "texture tex1" "a" "texture tex2" "b"', "both scale inputs are textures"),
+    ('Texture "s" "color" "scale" "color tex1" [1 1 1] "color tex2" [2 2 2]', 'both scale inputs are "rgb"'),
+    ('Material "uber" "texture opacity" "o"', 'no material "opacity"'),
+    ('Material "uber" "color opacity" [0.5 0.5 0.5]', 'no material "opacity"'),
+    ('MakeNamedMaterial "u" "string type" "uber" "color opacity" [1 0 1]', 'no material "opacity"'),
+    ('Material "mix" "string namedmaterial1" "a"', 'needs both "namedmaterial1" and "namedmaterial2"'),
+    ('Material "mix" "spectrum amount" [400 0.5 700 0.5] "string namedmaterial1" "a" "string namedmaterial2" "b"',
+     'spectrum "amount"'),
+    ('Material "glass" "float index" [1.5 1.6]', "more than one value"),
+    ('Material "glass" "float index" 1.5 "float eta" 1.4', 'both "index" and "eta"'),
+])
+def test_what_upgrade_cannot_convert_is_a_located_error(tmp_path, directive, message):
     path = tmp_path / "scene.pbrt"
-    path.write_text(f'Camera "perspective"\nWorldBegin\nLightSource "infinite" {params}\n')
-    with pytest.raises(SceneError, match="only converts a grey rgb") as info:
+    path.write_text(f'Camera "perspective"\nWorldBegin\n{directive}\n')
+    with pytest.raises(SceneError, match=message) as info:
         load_description(path)
     assert info.value.loc.line == 3
+    assert "upgrade" in str(info.value)

@@ -268,7 +268,7 @@ def test_defaults_without_options(tmp_path):
     (HEAD + 'MakeNamedMaterial "m" "string type" "diffuse"\nMakeNamedMaterial "m" "string type" "diffuse"', 4,
      "defined twice"),
     (HEAD + 'MakeNamedMaterial "m" "float roughness" 0', 3, '"string type" is required'),
-    (HEAD + 'Texture "t" "color" "constant"', 3, 'must be "float" or "spectrum"'),
+    (HEAD + 'Texture "t" "colour" "constant"', 3, 'must be "float" or "spectrum"'),
     (HEAD + 'Texture "t" "float" "constant"\nTexture "t" "float" "constant"', 4, "defined twice"),
     (HEAD + 'Rotate 10 0 0 0', 3, "zero length"),
     (HEAD + 'Texture "t" "float" "bogus"', 3, 'unknown texture class "bogus"'),
