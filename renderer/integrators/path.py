@@ -27,6 +27,7 @@ from renderer.lights.sample import LightEval, light_sampler
 from renderer.materials import dielectric, kind_id
 from renderer.materials.bsdf import SPECULAR
 from renderer.materials.selection import choose_material
+from renderer.optics.dispersion import sample_wavelength, wavelength_weight
 from renderer.pixel_filter import sample_filter
 from renderer.sampling.frames import to_local, to_world
 from renderer.sampling.mis import power_heuristic
@@ -34,7 +35,6 @@ from renderer.sampling.rng import sample_rng
 from renderer.sampling.samplers import (BSDF, DIM_BOUNCE, DIM_LENS, DIMS_PER_BOUNCE, LIGHT, LIGHT_CHOICE, LOBE,
                                         ROULETTE, SUBSURFACE, WAVELENGTH, SamplerParams, get_1d, get_2d,
                                         get_pixel_2d, hashed_bits, start_sample)
-from renderer.optics.dispersion import sample_wavelength, wavelength_weight
 from renderer.sensor import film_value
 from renderer.vecmath import max3
 
