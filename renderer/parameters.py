@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any, Iterable
 
 import numpy as np
 
-from renderer.color.named_spectra import SpectralRGB
+from renderer.color.named_spectra import SpectralFloat, SpectralRGB
 from renderer.errors import Location, SceneError
 
 if TYPE_CHECKING:   # only annotations: importing the scene package here would make import order matter
@@ -104,6 +104,8 @@ class Parameter:
             return int(a.ravel()[0])
         if isinstance(value, SpectralRGB) and self.type == "rgb":
             return SpectralRGB((float(x) for x in a), value.samples)     # the spectrum travels with its RGB
+        if isinstance(value, SpectralFloat) and self.type == "float":
+            return SpectralFloat(float(a.ravel()[0]), value.samples)     # and with its float
         return tuple(float(x) for x in a) if self.type in ("rgb", "point3", "floats", "points3") else float(a.ravel()[0])
 
     def read(self, ps: ParamSet, owner: str) -> Any:
@@ -118,6 +120,9 @@ class Parameter:
             return TextureRef(ps.texture(self.name))
         if self.type == "float":
             v = ps.float(self.name)
+            samples = ps.spectrum_samples(self.name)
+            if samples is not None:
+                v = SpectralFloat(v, samples)
         elif self.type == "rgb":
             v = tuple(ps.rgb(self.name))
             samples = ps.spectrum_samples(self.name)

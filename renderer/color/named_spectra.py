@@ -5,10 +5,11 @@
 A spectrum becomes RGB by its projection onto the CIE 1931 observer under D65, normalised so a
 constant spectrum c gives (c, c, c) (sRGB's white is D65), then linear sRGB; a float parameter
 (a dielectric's eta) takes the same projection's Y, the luminance-weighted mean. This is how RGB
-renderers (Mitsuba's ``*_rgb`` variants, pbrt-v3) use spectral data; dispersion is not
-reproduced. A colour parameter read from a spectrum is a :class:`SpectralRGB`, which keeps the
-samples, so a material can evaluate its optics per wavelength: ``conductor`` bakes its spectral
-Fresnel term into a table (see docs/pbrt-v4.md for the measured agreement with pbrt-v4). The named tables
+renderers (Mitsuba's ``*_rgb`` variants, pbrt-v3) use spectral data. A colour parameter read
+from a spectrum is a :class:`SpectralRGB` and a float one a :class:`SpectralFloat`, which keep
+the samples, so a material can evaluate its optics per wavelength: ``conductor`` bakes its
+spectral Fresnel term into a table, ``dielectric`` refracts with eta(λ) (dispersion; see
+docs/pbrt-v4.md for the measured agreement with pbrt-v4). The named tables
 are pbrt-v4's own (``data/pbrt_spectra.json``, extracted by ``data/make_pbrt_spectra.py``)."""
 from __future__ import annotations
 
@@ -87,24 +88,43 @@ def _xyz(samples: np.ndarray) -> np.ndarray:
     return v @ w
 
 
-class SpectralRGB(tuple):
+class _Sampled:
+    """The spectrum a parameter's value was read from, kept beside the value itself."""
+
+    samples: np.ndarray
+    _plain: type          # the builtin type of the value (what pickling rebuilds it from)
+
+    def __reduce__(self):
+        return type(self), (self._plain(self), self.samples)
+
+    def on_grid(self, wavelengths_nm: np.ndarray) -> np.ndarray:
+        """The spectrum at these wavelengths (held constant beyond its measured range, as the projection)."""
+        return np.interp(np.asarray(wavelengths_nm, np.float64), self.samples[:, 0], self.samples[:, 1])
+
+
+class SpectralRGB(_Sampled, tuple):
     """A colour parameter's RGB projection that keeps the spectrum it came from, for a material
     that evaluates its optics per wavelength (a conductor's Fresnel term: :mod:`renderer.materials.conductor`).
     Everything else sees the plain RGB tuple."""
-
-    samples: np.ndarray
 
     def __new__(cls, rgb, samples: np.ndarray) -> "SpectralRGB":
         self = super().__new__(cls, rgb)
         self.samples = np.asarray(samples, np.float64)
         return self
 
-    def __reduce__(self):
-        return SpectralRGB, (tuple(self), self.samples)
+    _plain = tuple
 
-    def on_grid(self, wavelengths_nm: np.ndarray) -> np.ndarray:
-        """The spectrum at these wavelengths (held constant beyond its measured range, as the projection)."""
-        return np.interp(np.asarray(wavelengths_nm, np.float64), self.samples[:, 0], self.samples[:, 1])
+
+class SpectralFloat(_Sampled, float):
+    """A float parameter's luminance-weighted mean that keeps the spectrum it came from (a
+    dielectric's dispersive eta: :mod:`renderer.materials.dispersion`). Everything else sees the float."""
+
+    def __new__(cls, value: float, samples: np.ndarray) -> "SpectralFloat":
+        self = super().__new__(cls, value)
+        self.samples = np.asarray(samples, np.float64)
+        return self
+
+    _plain = float
 
 
 def spectrum_rgb(samples: np.ndarray) -> np.ndarray:

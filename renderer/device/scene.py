@@ -12,7 +12,7 @@ from renderer.errors import SceneError
 from renderer.geometry.instances import Geometry, GeometryData, build_geometry
 from renderer.lights import build_light_table, kinds_in
 from renderer.lights.table import Lights
-from renderer.materials import Materials, build_materials, disney, selection, thinfilm
+from renderer.materials import Materials, build_materials, dielectric, disney, selection, thinfilm
 from renderer.color.rgb_weights import RgbWeightTable, make_rgb_weight_table
 from renderer.scene.description import SceneDescription
 from renderer.settings import THIN_FILM_MODE, thin_film_samples
@@ -46,6 +46,7 @@ class Features:
     subsurface: bool = False    # some disney material scatters below its surface (renderer.subsurface)
     alpha: bool = False         # some shape has an alpha cut-out or the interface material
     mix: bool = False           # some material is a mix (chosen per hit before shading)
+    dispersion: bool = False    # some dielectric's eta varies with the wavelength (renderer.optics.dispersion)
 
 
 @dataclass
@@ -60,11 +61,12 @@ class DeviceScene:
     warnings: list[str] = field(default_factory=list)   # the upload's own (a table the thin-film mode could not bake)
 
 
-def _spectral_table(needed: bool, thin_film: str, device: str) -> tuple[RgbWeightTable, int]:
+def _spectral_table(needed: bool, dispersion: bool, thin_film: str, device: str) -> tuple[RgbWeightTable, int]:
     """The colour-matching table the thin-film BSDF integrates with, uploaded only when a thinfilm
-    material is in the scene and the mode samples wavelengths; otherwise a one-entry stand-in."""
+    material is in the scene and the mode samples wavelengths, or when a dielectric disperses
+    (its paths' wavelength weights); otherwise a one-entry stand-in."""
     n = thin_film_samples(thin_film)
-    if needed and n > 0:
+    if (needed and n > 0) or dispersion:
         return make_rgb_weight_table(device), n
     table = RgbWeightTable()
     table.w = wp.zeros(1, dtype=wp.vec3, device=device)
@@ -117,7 +119,8 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     flip = [int(s.reverse_orientation) for s in desc.shapes] or [0]
     S.shape_flip = wp.array(np.array(flip, np.int32), dtype=int, device=device)
     S.shape_alpha = wp.array(alpha, dtype=int, device=device)
-    S.spectral, S.spectral_n = _spectral_table(thinfilm.NAME in used, thin_film, device)
+    dispersion = any(m.kind == dielectric.NAME and dielectric.disperses(m.values) for m in desc.materials)
+    S.spectral, S.spectral_n = _spectral_table(thinfilm.NAME in used, dispersion, thin_film, device)
 
     light_kinds, escaping = kinds_in(lights)
     feats = Features(
@@ -129,6 +132,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
         subsurface=any(m.kind == disney.NAME and disney.has_subsurface(m.values) for m in desc.materials),
         alpha=bool(np.any(alpha >= 0)),
         mix=any(m.kind == selection.MIX for m in desc.materials),
+        dispersion=dispersion,
     )
     keep = [geo, mat_keep, tex_keep, light_keep, cam_keep, S.shape_material, S.shape_light, S.shape_flip,
             S.shape_alpha, S.spectral.w]

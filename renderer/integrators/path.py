@@ -24,8 +24,10 @@ from renderer.integrators.subsurface import subsurface_scatter
 from renderer.integrators.visibility import ray_queries
 from renderer.lights import dispatch
 from renderer.lights.sample import LightEval, light_sampler
+from renderer.materials import dielectric, kind_id
 from renderer.materials.bsdf import SPECULAR
 from renderer.materials.selection import choose_material
+from renderer.optics.dispersion import sample_wavelength, wavelength_weight
 from renderer.pixel_filter import sample_filter
 from renderer.sampling.frames import to_local, to_world
 from renderer.sampling.mis import power_heuristic
@@ -35,6 +37,9 @@ from renderer.sampling.samplers import (BSDF, DIM_BOUNCE, DIM_LENS, DIMS_PER_BOU
                                         get_pixel_2d, hashed_bits, start_sample)
 from renderer.sensor import film_value
 from renderer.vecmath import max3
+
+#: The kind id of dielectrics, the material that may disperse.
+DIELECTRIC = wp.constant(kind_id(dielectric.NAME))
 
 
 @wp.func
@@ -59,6 +64,7 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
     has_sss = features.subsurface
     closest, blocked = ray_queries(features)
     mixes = features.mix
+    dispersion = features.dispersion
 
     @wp.kernel(module="unique", module_options=KERNEL_OPTIONS)
     def integrate(scene: Scene, smp: SamplerParams, seed: int, sample_index: int, row_offset: int, max_depth: int,
@@ -92,6 +98,7 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
         prev_specular = bool(True)
         prev_p = o
         depth = int(0)
+        hero = float(0.0)       # the path's wavelength (nm) once it met a dispersive dielectric; 0: none yet
         while True:
             hit = closest(scene, o, d, 1.0e30)
             n_rays += 1
@@ -139,6 +146,14 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
                 ub = get_2d(smp, ps, dim + BSDF)
                 u_bsdf = wp.vec3(ub[0], ub[1], get_1d(smp, ps, dim + LOBE))
                 u_rr = get_1d(smp, ps, dim + ROULETTE)
+            if wp.static(dispersion):
+                # the first dispersive interface picks the path's wavelength (renderer.optics.dispersion)
+                if b.kind == DIELECTRIC and b.table_first > 0:
+                    if hero == 0.0:
+                        hs = sample_wavelength(b.wavelength_u)
+                        hero = hs[0]
+                        beta = wp.cw_mul(beta, wavelength_weight(scene.spectral, hs))
+                    b = dielectric.dispersed(b, hero)
             if wp.static(has_sss):
                 # subsurface scattering may move the vertex to where light leaves the object
                 sss = subsurface_scatter(scene, b, s, hit.inst, wo, u_sss)
@@ -198,7 +213,8 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
                     if u_rr < q:
                         break
                     beta = beta / (1.0 - q)
-        if wp.isfinite(L) and L[0] >= 0.0 and L[1] >= 0.0 and L[2] >= 0.0:
+        # a path through dispersive glass carries one wavelength, whose sRGB may have a negative channel
+        if wp.isfinite(L) and (wp.static(dispersion) or (L[0] >= 0.0 and L[1] >= 0.0 and L[2] >= 0.0)):
             film[pixel] = film[pixel] + film_value(scene.cam.sensor, L, fs.weight)
         else:
             wp.atomic_add(bad_samples, py, 1)   # per row: no two CPU threads ever add into one counter

@@ -5,7 +5,8 @@ defaults: :class:`renderer.parameters.Parameters`), the Warp functions ``eval_pd
 (see :mod:`renderer.materials.bsdf`) and, where some values derive from others, an optional
 ``resolve(values, loc) -> (values, extra flag bits)``, and where it has per-layer data, an optional
 ``layer_rows(values, loc) -> (n, 4) array`` for the scene's layer table, and where it bakes a
-table over the angle of incidence (:mod:`renderer.optics.angular_table`), an optional
+table over the angle of incidence (:mod:`renderer.optics.angular_table`) or, a dispersive
+dielectric, over the wavelength (:mod:`renderer.optics.dispersion`), an optional
 ``table_rows(values, loc, thin_film) -> ((n, 4) array, warning)`` (no rows: no table).
 Registering the module in ``REGISTRY`` is all it takes to add one: parsing, validation, the device layout and the docs table follow from
 ``PARAMS``, and kernels are specialised to the materials a scene uses.
@@ -135,7 +136,7 @@ class Materials:
     layers: wp.array(dtype=wp.vec4)     # every material's layer rows (renderer.materials.stack; 1 dummy row if none)
     layer_first: wp.array(dtype=int)    # a material's first row in layers
     layer_count: wp.array(dtype=int)    # and its number of rows (0: no stack)
-    table_first: wp.array(dtype=int)    # a material's baked table over the angle in layers (0: none; row 0 is a dummy)
+    table_first: wp.array(dtype=int)    # a material's baked table in layers (angle; wavelength: dispersion); 0: none
     bounds: wp.array2d(dtype=wp.vec2)   # (n_materials, MAX_SLOTS) each slot's declared [lo, hi]: textures are
                                         # clamped to it as pbrt clamps (a reflectance texture of 100 reflects 1)
     mix: wp.array(dtype=wp.vec3i)       # a mix's (first, second material, amount texture id)

@@ -42,7 +42,7 @@ class BSDF:
     layers: wp.array(dtype=wp.vec4)  # the scene's layer table (renderer.materials.stack)
     layer_first: int        # this material's first row in it
     layer_count: int        # and its number of rows; 0: no stack
-    table_first: int        # its baked table over the angle in layers (renderer.optics.angular_table); 0: none
+    table_first: int        # its baked table in layers (renderer.optics.angular_table, .dispersion); 0: none
 
 
 @wp.struct

@@ -1,15 +1,20 @@
 """pbrt-v4's ``coatedconductor``: a dielectric coat (smooth or rough) over a conductor base (smooth
 or rough; complex index or artist ``reflectance``), with a slab of medium between them, evaluated
-by the layered random walk (:mod:`.layered`). The conductor's index is relative to the coat's."""
+by the layered random walk (:mod:`.layered`). The conductor's index is relative to the coat's.
+
+A spectral ``conductor.eta`` or ``conductor.k`` (pbrt-v4's named ``metal-*`` spectra, inline
+samples, ``.spd``) gives the base the conductor's spectral Fresnel table
+(:func:`.conductor.spectral_fresnel_rows`), baked for the index relative to the coat."""
 from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 import warp as wp
 
 from renderer.errors import Location, SceneError
 from renderer.materials.bsdf import BSDF, BSDFEval, BSDFSample
-from renderer.materials.conductor import COPPER_ETA, COPPER_K, artist_k
+from renderer.materials.conductor import COPPER_ETA, COPPER_K, artist_k, spectral_fresnel_rows
 from renderer.materials.layered import (CONDUCTOR, DIELECTRIC, FIRST_FREE_FLAG, SLAB_PARAMS, Interface, Slab,
                                         layered_eval_pdf, layered_sample, make_slab, walk_flags)
 from renderer.materials.microfacet import REMAP_ROUGHNESS, resolve_roughness, roughness_params, roughness_to_alpha
@@ -50,6 +55,15 @@ def resolve(values: dict[str, Any], loc: Location | None) -> tuple[dict[str, Any
     return v, walk_flags(values) | (ARTIST if artist else 0)
 
 
+def table_rows(values: dict[str, Any], loc: Location | None, thin_film: str) -> tuple[np.ndarray, str]:
+    """The base's spectral Fresnel table (relative to the coat) when its eta or k is a spectrum."""
+    if "reflectance" in values:
+        return np.zeros((0, 4), np.float32), ""
+    rows, warning = spectral_fresnel_rows(PARAMS.value(values, "conductor.eta"), PARAMS.value(values, "conductor.k"),
+                                          float(PARAMS.value(values, "interface.eta")))
+    return rows, f"coatedconductor: {warning}" if warning else ""
+
+
 @wp.func
 def _slab(b: BSDF) -> Slab:
     remap = (b.flags & FLAG.remaproughness) != 0
@@ -67,6 +81,8 @@ def _slab(b: BSDF) -> Slab:
     else:
         base.eta = b.p[_CETA] / ieta
         base.k = b.p[_CK] / ieta
+        base.coat.layers = b.layers
+        base.coat.table_first = b.table_first
     return make_slab(top, base, b.p[SLOT.thickness][0], b.p[SLOT.albedo], b.p[SLOT.g][0], b.flags, b.wavelength_u)
 
 

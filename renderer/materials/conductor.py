@@ -60,20 +60,29 @@ def _on_grid(v: Any, lam: np.ndarray) -> np.ndarray | None:
     return np.full(lam.shape, rgb[0]) if np.all(rgb == rgb[0]) else None
 
 
-def table_rows(values: dict[str, Any], loc: Location | None, thin_film: str) -> tuple[np.ndarray, str]:
-    """The spectral Fresnel table of a conductor whose eta or k is a spectrum (see the module
-    docstring); no rows otherwise. The thin-film mode does not matter: a table is exact here."""
-    eta, k = PARAMS.value(values, "eta"), PARAMS.value(values, "k")
-    if "reflectance" in values or not (isinstance(eta, SpectralRGB) or isinstance(k, SpectralRGB)):
+def spectral_fresnel_rows(eta: Any, k: Any, outside: float = 1.0) -> tuple[np.ndarray, str]:
+    """The spectral Fresnel table of a conductor of index (eta + i k) / outside where eta or k is a
+    spectrum (see the module docstring); no rows otherwise. ``outside``: the index of the medium
+    it borders (coatedconductor's coat)."""
+    if not (isinstance(eta, SpectralRGB) or isinstance(k, SpectralRGB)):
         return np.zeros((0, 4), np.float32), ""
     if isinstance(eta, TextureRef) or isinstance(k, TextureRef):
         return np.zeros((0, 4), np.float32), ""
     lam = mode_wavelengths("reference")[0]
     eta_l, k_l = _on_grid(eta, lam), _on_grid(k, lam)
     if eta_l is None or k_l is None:
-        return np.zeros((0, 4), np.float32), ('conductor: a spectrum beside a non-grey RGB colour (eta, k) '
+        return np.zeros((0, 4), np.float32), ('a spectrum beside a non-grey RGB colour (eta, k) '
                                               'keeps the per-channel Fresnel of their RGB projections')
-    return conductor_table(eta_l, k_l), ""
+    return conductor_table(eta_l / outside, k_l / outside), ""
+
+
+def table_rows(values: dict[str, Any], loc: Location | None, thin_film: str) -> tuple[np.ndarray, str]:
+    """The spectral Fresnel table of a conductor whose eta or k is a spectrum. The thin-film mode
+    does not matter: a table is exact here."""
+    if "reflectance" in values:
+        return np.zeros((0, 4), np.float32), ""
+    rows, warning = spectral_fresnel_rows(PARAMS.value(values, "eta"), PARAMS.value(values, "k"))
+    return rows, f"conductor: {warning}" if warning else ""
 
 
 @wp.func

@@ -1,10 +1,17 @@
 """pbrt's ``dielectric``: glass-like interface with Fresnel-weighted reflection and refraction,
 smooth (delta lobes) or rough (GGX, Walter et al. 2007). ``eta`` is the inside over the outside
-index; the surface normal points outside. Radiance is scaled by 1/eta'^2 on refraction."""
+index; the surface normal points outside. Radiance is scaled by 1/eta'^2 on refraction.
+
+An ``eta`` read from a spectrum that is not constant (``"spectrum eta" "glass-F11"``) is
+dispersive: the material's eta(λ) is uploaded as a table (:mod:`renderer.optics.dispersion`),
+and in scenes with one the integrator gives each path a wavelength at its first dispersive
+interface and passes eta(λ) in through :func:`dispersed`. Elsewhere (the AOV kernel) eta is the
+spectrum's luminance-weighted mean."""
 from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 import warp as wp
 
 from renderer.errors import Location
@@ -12,6 +19,7 @@ from renderer.materials.bsdf import (BSDF, GLOSSY, REFLECTION, SPECULAR, TRANSMI
                                      delta_sample, failed_sample, reflect_z, refract, sampled)
 from renderer.materials.microfacet import (ROUGHNESS_PARAMS, ggx_D, ggx_G, ggx_sample_visible, ggx_visible_pdf,
                                            half_vector, is_smooth, resolve_roughness, roughness_to_alpha)
+from renderer.optics.dispersion import eta_at, eta_rows, is_dispersive
 from renderer.optics.fresnel import fresnel_dielectric
 from renderer.parameters import Parameter, Parameters
 
@@ -26,6 +34,29 @@ FLAG = PARAMS.flags
 
 def resolve(values: dict[str, Any], loc: Location | None) -> tuple[dict[str, Any], int]:
     return resolve_roughness(values), 0
+
+
+def disperses(values: dict[str, Any]) -> bool:
+    """Whether this dielectric's eta varies with the wavelength."""
+    return is_dispersive(PARAMS.value(values, "eta"))
+
+
+def table_rows(values: dict[str, Any], loc: Location | None, thin_film: str) -> tuple[np.ndarray, str]:
+    """A dispersive dielectric's eta(λ) rows; none otherwise."""
+    if not disperses(values):
+        return np.zeros((0, 4), np.float32), ""
+    return eta_rows(PARAMS.value(values, "eta")), ""
+
+
+@wp.func
+def dispersed(b: BSDF, lambda_nm: float) -> BSDF:
+    """b with the eta of its dispersive table (b.table_first > 0) at wavelength lambda_nm."""
+    out = b
+    eta = eta_at(b.layers, b.table_first, lambda_nm)
+    out.p[SLOT.eta, 0] = eta
+    out.p[SLOT.eta, 1] = eta
+    out.p[SLOT.eta, 2] = eta
+    return out
 
 
 @wp.func

@@ -84,7 +84,8 @@ class Interface:
     k: wp.vec3          # CONDUCTOR
     alpha: wp.vec2      # DIELECTRIC, CONDUCTOR, FILM: GGX roughness
     albedo: wp.vec3     # LAMBERT
-    coat: Coating       # FILM (its substrate must be clear)
+    coat: Coating       # FILM (its substrate must be clear); CONDUCTOR: its spectral Fresnel table at
+                        # coat.layers[coat.table_first] (0: the per-channel formula)
 
 
 @wp.struct
@@ -128,7 +129,7 @@ def iface_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: boo
     if s.kind == LAMBERT:
         e = lambert_eval(s.albedo, wo, wi)
     else:
-        e = conductor_eval(s.eta, s.k, s.alpha, wo, wi, s.coat.layers, 0)
+        e = conductor_eval(s.eta, s.k, s.alpha, wo, wi, s.coat.layers, s.coat.table_first)
     return e
 
 
@@ -143,7 +144,7 @@ def iface_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bo
         return failed_sample()
     if s.kind == LAMBERT:
         return lambert_sample(s.albedo, wo, u)
-    return conductor_sample(s.eta, s.k, s.alpha, wo, u, s.coat.layers, 0)
+    return conductor_sample(s.eta, s.k, s.alpha, wo, u, s.coat.layers, s.coat.table_first)
 
 
 @wp.func
