@@ -3,7 +3,8 @@
 
     python benchmarks/time_to_error.py [--scenes spheres thinfilm beach] [--out out/time_to_error]
 
-Every run is its own process (import, scene load, cached-kernel load, render, image written),
+Every run is its own process (import, scene load, cached-kernel load, render, image written)
+that imports only its own renderer (the spheres' meshes are made once here and pickled),
 timed from outside after one untimed warm-up run of the same configuration (so neither renderer
 pays its first JIT/compile), as wall seconds and as the process's CPU seconds (user + system:
 the fairer number on a machine other jobs share; both renderers use every core). Each renderer is compared with its own high-spp reference rendered
@@ -18,6 +19,7 @@ from __future__ import annotations
 import argparse
 import csv
 import os
+import pickle
 import resource
 import subprocess
 import sys
@@ -29,7 +31,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 os.environ.setdefault("WARP_CACHE_PATH", str(ROOT / ".warp-cache"))
-sys.path[:0] = [str(ROOT), str(ROOT / "tests"), str(ROOT / "tests" / "integrators")]
+sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
 OURS = ("independent", "stratified", "halton", "sobol", "paddedsobol", "zsobol")
 MITSUBA = ("independent", "multijitter", "ldsampler")
@@ -40,7 +42,7 @@ SEED, REF_SEED = 3, 99
 
 def spheres_spec(res: tuple[int, int], spp: int):
     """Diffuse and glass spheres on a grey floor under a sky and a sun (the issue's scene)."""
-    from test_mitsuba_crosscheck import Spec, floor, sphere
+    from crosscheck_scenes import Spec, floor, sphere
 
     sun = np.array([0.4, 1.0, -0.5])
     return Spec(objects=[sphere((-0.9, 0.0, 0.2), 0.6, rgb=(0.8, 0.3, 0.2)),
@@ -50,15 +52,23 @@ def spheres_spec(res: tuple[int, int], spp: int):
                 sun=(sun / np.linalg.norm(sun), 3.0), max_depth=8, spp=spp)
 
 
-def our_image(scene: str, sampler: str, res: tuple[int, int], spp: int, seed: int) -> np.ndarray:
+def _spec(path: Path):
+    """The spheres' meshes and settings as the parent pickled them (made once, with trimesh), so
+    that a child imports only its own renderer, as a user's process would."""
+    with open(path, "rb") as f:
+        return pickle.load(f)
+
+
+def our_image(scene: str, sampler: str, spp: int, seed: int, spec: Path) -> np.ndarray:
     import renderer
     from renderer.session import RenderSession
     from renderer.settings import settings_for
 
+    res = SIZES[scene][0]
     if scene == "spheres":
-        from test_mitsuba_crosscheck import ours
+        from crosscheck_scenes import ours
 
-        desc = ours(spheres_spec(res, spp))
+        desc = ours(_spec(spec))
     else:
         desc = renderer.load_scene(ROOT / "scenes" / {"thinfilm": "fig1_thinfilm.pbrt", "beach": "beach.pbrt"}[scene])
     desc.sampler.spp = spp          # the sampler's pattern is the run's sample count, as pbrt's --spp
@@ -67,28 +77,26 @@ def our_image(scene: str, sampler: str, res: tuple[int, int], spp: int, seed: in
     return s.image()
 
 
-def mitsuba_image(sampler: str, res: tuple[int, int], spp: int, seed: int) -> np.ndarray:
+def mitsuba_image(sampler: str, spp: int, seed: int, spec: Path) -> np.ndarray:
     llvm19 = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"     # Dr.Jit's LLVM backend needs libllvm19 here
     if "DRJIT_LIBLLVM_PATH" not in os.environ and os.path.exists(llvm19):
         os.environ["DRJIT_LIBLLVM_PATH"] = llvm19
     import mitsuba as mi
 
     mi.set_variant("llvm_ad_rgb")
-    import test_mitsuba_crosscheck as xc
+    from crosscheck_scenes import mitsuba_scene
 
-    xc.mi = mi
     with tempfile.TemporaryDirectory() as tmp:
-        scene = xc.mitsuba_scene(spheres_spec(res, spp), tmp, sampler=sampler)
+        scene = mitsuba_scene(_spec(spec), tmp, sampler=sampler)
         # mirrored in x relative to pbrt's LookAt (see the cross-check's docstring): flip back
         return np.asarray(mi.render(scene, spp=spp, seed=seed), dtype=np.float32)[:, ::-1, :3]
 
 
 def child(argv: list[str]) -> None:
     """One configuration in this process: render and save the image as .npy."""
-    who, scene, sampler, spp, seed, out = argv
-    res = SIZES[scene][0]
-    img = mitsuba_image(sampler, res, int(spp), int(seed)) if who == "mitsuba" else \
-        our_image(scene, sampler, res, int(spp), int(seed))
+    who, scene, sampler, spp, seed, out, spec = argv
+    img = mitsuba_image(sampler, int(spp), int(seed), Path(spec)) if who == "mitsuba" else \
+        our_image(scene, sampler, int(spp), int(seed), Path(spec))
     np.save(out, img)
 
 
@@ -97,10 +105,20 @@ def _children_cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
+def spec_file(scene: str, spp: int, out: Path) -> Path:
+    """The pickled spheres scene at ``spp`` (made here, outside the timed children)."""
+    path = out / f"spec_{scene}_{spp}.pkl"
+    if scene == "spheres" and not path.exists():
+        with open(path, "wb") as f:
+            pickle.dump(spheres_spec(SIZES[scene][0], spp), f)
+    return path
+
+
 def run(who: str, scene: str, sampler: str, spp: int, seed: int, out: Path) -> tuple[float, float]:
     """Whole-process (wall, CPU) seconds of one configuration."""
+    spec = spec_file(scene, spp, out.parent)
     t0, c0 = time.perf_counter(), _children_cpu()
-    subprocess.run([sys.executable, __file__, "--child", who, scene, sampler, str(spp), str(seed), str(out)],
+    subprocess.run([sys.executable, __file__, "--child", who, scene, sampler, str(spp), str(seed), str(out), str(spec)],
                    check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     return time.perf_counter() - t0, _children_cpu() - c0
 

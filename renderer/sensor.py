@@ -21,7 +21,7 @@ from renderer.vecmath import max3
 
 @wp.struct
 class Sensor:
-    xyz_from_rgb: wp.mat33
+    xyz_from_rgb: wp.mat33             # linear sRGB to XYZ; set (and read) only when limit is finite
     limit: float                       # maxcomponentvalue / imaging ratio, in XYZ of radiance; inf: none
 
 
@@ -48,10 +48,12 @@ def _srgb():
 
 def build_sensor(film: FilmDesc, camera: CameraDesc) -> Sensor:
     s = Sensor()
-    s.xyz_from_rgb = wp.mat33(*np.asarray(_srgb().matrix_RGB_to_XYZ, dtype=np.float32).ravel())
     ratio = imaging_ratio(film, camera)
     limit = film.max_component_value / ratio if ratio > 0.0 else float("inf")
     s.limit = float(min(limit, 3.4e38))
+    if s.limit < 3.0e38:     # film_value reads the matrix only under a finite clamp; without one
+        # colour-science is not imported at all (0.3 CPU-s of every render)
+        s.xyz_from_rgb = wp.mat33(*np.asarray(_srgb().matrix_RGB_to_XYZ, dtype=np.float32).ravel())
     return s
 
 

@@ -19,11 +19,12 @@ from renderer.device.kernel_options import KERNEL_OPTIONS
 from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import surface_at
 from renderer.geometry.offsets import offset_origin, ray_epsilon
+from renderer.integrators.emission import emitted_adder, escaped_adder
 from renderer.integrators.shading import load_bsdf, shading_functions
 from renderer.integrators.subsurface import subsurface_scatter
 from renderer.integrators.visibility import ray_queries
 from renderer.lights import dispatch
-from renderer.lights.sample import LightEval, light_sampler
+from renderer.lights.sample import light_sampler
 from renderer.materials import dielectric, kind_id
 from renderer.materials.bsdf import SPECULAR
 from renderer.materials.selection import choose_material
@@ -42,24 +43,14 @@ from renderer.vecmath import max3
 DIELECTRIC = wp.constant(kind_id(dielectric.NAME))
 
 
-@wp.func
-def _emission(beta: wp.vec3, e: LightEval, sel: float, prev_pdf: float, prev_specular: bool, mis: bool) -> wp.vec3:
-    """Light a path finds on a light, MIS-weighted against next-event estimation (which could have
-    sampled it unless the bounce that led here was specular)."""
-    w = float(1.0)
-    if mis:
-        if not prev_specular:
-            w = power_heuristic(prev_pdf, e.pdf * sel)
-    return wp.cw_mul(beta, e.L) * w
-
-
 @lru_cache(maxsize=None)
 def integrator_kernel(features: Features, independent: bool = False) -> wp.Kernel:
     shading_frame, eval_pdf, sample_bsdf = shading_functions(features)
-    seen, seen_ids = dispatch(features.escaping, "escaped")       # lights rays leaving the scene can see
-    emitters, emitter_ids = dispatch(features.lights, "emitted")  # lights on surfaces
-    sample_light = light_sampler(*dispatch(features.lights, "sample"))
     nee = features.nee
+    add_escaped = escaped_adder(*dispatch(features.escaping, "escaped"), nee)   # lights rays leaving the scene see
+    emitters, emitter_ids = dispatch(features.lights, "emitted")              # lights on surfaces
+    add_emitted = emitted_adder(emitters, emitter_ids, nee)
+    sample_light = light_sampler(*dispatch(features.lights, "sample"))
     light_sampling = nee and len(features.lights) > 0
     has_sss = features.subsurface
     closest, blocked = ray_queries(features)
@@ -103,12 +94,7 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
             hit = closest(scene, o, d, 1.0e30)
             n_rays += 1
             if hit.inst < 0:
-                for j in range(wp.static(len(seen))):
-                    for i in range(n_lights):
-                        if scene.lights.kind[i] == wp.static(seen_ids[j]):
-                            e = wp.static(seen[j].escaped)(scene.lights, i, o, d)
-                            if max3(e.L) > 0.0:
-                                L = L + _emission(beta, e, sel, prev_pdf, prev_specular, wp.static(nee))
+                L = add_escaped(scene.lights, o, d, beta, sel, prev_pdf, prev_specular, L)
                 break
             shape = scene.geo.inst_shape[hit.inst]
             s = surface_at(scene.geo, hit, scene.shape_flip[shape] != 0)
@@ -116,10 +102,7 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
             if wp.static(len(emitters) > 0):
                 li = scene.shape_light[shape]
                 if li >= 0:
-                    for j in range(wp.static(len(emitters))):
-                        if scene.lights.kind[li] == wp.static(emitter_ids[j]):
-                            e = wp.static(emitters[j].emitted)(scene.lights, li, prev_p, s.p, s.ng, wo)
-                            L = L + _emission(beta, e, sel, prev_pdf, prev_specular, wp.static(nee))
+                    L = add_emitted(scene.lights, li, prev_p, s.p, s.ng, wo, beta, sel, prev_pdf, prev_specular, L)
             if depth >= max_depth:
                 break
             m = scene.shape_material[shape]

@@ -88,7 +88,7 @@ class Shading(NamedTuple):
 @lru_cache(maxsize=None)
 def shading_functions(features: Features) -> Shading:
     mods, kinds = dispatch_table(features.materials)
-    n_mat = len(mods)
+    kinds = tuple(kinds)
     has_bump = features.bump
 
     @wp.func
@@ -100,20 +100,28 @@ def shading_functions(features: Features) -> Shading:
                 ns = bump_normal(scene, bt, s, ns)
         return frame_from_tangent(ns, s.dpdu)
 
-    @wp.func
-    def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
-        e = BSDFEval()
-        for j in range(wp.static(n_mat)):
-            if b.kind == wp.static(kinds[j]):
-                e = wp.static(mods[j].eval_pdf)(b, wo, wi)
-        return e
+    return Shading(shading_frame, _switch(tuple(m.eval_pdf for m in mods), kinds, BSDFEval),
+                   _switch(tuple(m.sample for m in mods), kinds, BSDFSample))
+
+
+@lru_cache(maxsize=None)
+def _switch(hooks: tuple[wp.Function, ...], kinds: tuple[int, ...], result: type) -> wp.Function:
+    """``f(b, wo, x)``: the hook of material kind ``b.kind`` (``result()`` for none), as a chain of
+    one function per kind, each naming its kind and the next link by values known when it is
+    declared (a loop reading ``wp.static(kinds[j])`` would make Warp generate the kernel's code
+    in every process just to hash it: renderer/integrators/emission.py)."""
+    if not hooks:
+        @wp.func
+        def none(b: BSDF, wo: wp.vec3, x: wp.vec3):
+            return result()
+
+        return none
+    hook, kind, rest = hooks[0], kinds[0], _switch(hooks[1:], kinds[1:], result)
 
     @wp.func
-    def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
-        s = BSDFSample()
-        for j in range(wp.static(n_mat)):
-            if b.kind == wp.static(kinds[j]):
-                s = wp.static(mods[j].sample)(b, wo, u)
-        return s
+    def one(b: BSDF, wo: wp.vec3, x: wp.vec3):
+        if b.kind == wp.static(kind):
+            return wp.static(hook)(b, wo, x)
+        return wp.static(rest)(b, wo, x)
 
-    return Shading(shading_frame, eval_pdf, sample)
+    return one

@@ -37,7 +37,7 @@ class LightEval:
 def light_sampler(modules: tuple[ModuleType, ...], ids: tuple[int, ...]) -> wp.Function:
     """A device function ``sample_light(lights, p, u_select, u)`` that picks one light uniformly
     with ``u_select`` and calls its module's ``sample``; only ``modules`` are compiled in."""
-    n_kinds = len(modules)
+    pick = _switch(tuple(m.sample for m in modules), ids)
 
     @wp.func
     def sample_light(lights: Lights, p: wp.vec3, u_select: float, u: wp.vec2) -> LightSample:
@@ -45,11 +45,30 @@ def light_sampler(modules: tuple[ModuleType, ...], ids: tuple[int, ...]) -> wp.F
         i = wp.min(int(u_select * float(n)), n - 1)
         sel = 1.0 / float(n)
         k = lights.kind[i]
-        s = LightSample()
-        for j in range(wp.static(n_kinds)):
-            if k == wp.static(ids[j]):
-                s = wp.static(modules[j].sample)(lights, i, p, u)
+        s = pick(lights, k, i, p, u)
         s.pdf = s.pdf * sel
         return s
 
     return sample_light
+
+
+@lru_cache(maxsize=None)
+def _switch(hooks: tuple[wp.Function, ...], ids: tuple[int, ...]) -> wp.Function:
+    """``f(lights, kind, i, p, u)``: the ``sample`` of light kind ``kind`` (an empty sample for
+    none), one function per kind, each naming its kind and the next by values known when it is
+    declared (why: renderer/integrators/emission.py)."""
+    if not hooks:
+        @wp.func
+        def none(lights: Lights, k: int, i: int, p: wp.vec3, u: wp.vec2) -> LightSample:
+            return LightSample()
+
+        return none
+    hook, kind, rest = hooks[0], ids[0], _switch(hooks[1:], ids[1:])
+
+    @wp.func
+    def one(lights: Lights, k: int, i: int, p: wp.vec3, u: wp.vec2) -> LightSample:
+        if k == wp.static(kind):
+            return wp.static(hook)(lights, i, p, u)
+        return wp.static(rest)(lights, k, i, p, u)
+
+    return one
