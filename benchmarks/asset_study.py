@@ -172,15 +172,16 @@ def variants(args: argparse.Namespace) -> list[tuple[str, object, dict | None, s
 
 
 def table(rows: list[dict]) -> list[str]:
-    """Render cost as the render process's CPU seconds (load, BVH build and passes: steadier than
-    wall time on a shared machine; the passes' wall time is in the CSV)."""
-    lines = ["| knob | value | rebuilt | build wall s | build CPU s | assets MB | frame CPU s | crop CPU s | "
+    """Render time is RenderStats' (the passes' wall clock, as the EXR header has it); the render
+    process's wall and CPU seconds (with scene loading and BVH build) are in the CSV."""
+    lines = ["| knob | value | rebuilt | build wall s | build CPU s | assets MB | frame render s | crop render s | "
              "render peak MB | frame relMSE | frame FLIP | crop relMSE | crop FLIP |",
              "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
-        lines.append(f"| {r['knob']} | {r['value']} | {r['rebuilt'] or '-'} | {r['build_wall_s']:.1f} | "
-                     f"{r['build_cpu_s']:.1f} | {r['assets_mb']:.0f} | {r['frame_cpu_s']:.0f} | "
-                     f"{r['crop_cpu_s']:.0f} | {max(r['frame_peak_mb'], r['crop_peak_mb']):.0f} | "
+        rebuilt = {"reference": "all, from nothing", "noise floor": "(the reference's)"}.get(r["knob"], r["rebuilt"])
+        lines.append(f"| {r['knob']} | {r['value']} | {rebuilt or '-'} | {r['build_wall_s']:.1f} | "
+                     f"{r['build_cpu_s']:.1f} | {r['assets_mb']:.0f} | {r['frame_render_s']:.0f} | "
+                     f"{r['crop_render_s']:.0f} | {max(r['frame_peak_mb'], r['crop_peak_mb']):.0f} | "
                      f"{r['frame_relmse']:.3g} | {r['frame_flip']:.4f} | {r['crop_relmse']:.3g} | "
                      f"{r['crop_flip']:.4f} |")
     return lines
@@ -198,6 +199,20 @@ def read_rows(path: Path) -> list[dict]:
                 for r in csv.DictReader(f)]
 
 
+FIELDS = ["knob", "value", "rebuilt", "build_wall_s", "build_cpu_s", "build_peak_mb", "assets_mb",
+          *(f"{v}_{k}" for v in ("frame", "crop") for k in ("render_s", "wall_s", "cpu_s", "peak_mb", "relmse", "flip"))]
+
+
+def write_rows(path: Path, rows: list[dict]) -> None:
+    """Append rows to the CSV (made with its header if new): an interrupted run keeps what it measured."""
+    new = not path.is_file()
+    with open(path, "a", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=FIELDS, restval="nan")
+        if new:
+            w.writeheader()
+        w.writerows(rows)
+
+
 def write_report(rows: list[dict], out: Path, name: str, head: str) -> None:
     """``name``.md (the table under ``head``) and ``name``.png in ``out``."""
     (out / f"{name}.md").write_text("\n".join([head, "", *table(rows)]) + "\n")
@@ -211,10 +226,10 @@ def plot(rows: list[dict], path: Path, floor: dict) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(1, 3, figsize=(11, 3.4), dpi=90)
-    panels = [("frame_cpu_s", "frame_flip", "whole frame, small: FLIP vs render CPU s"),
-              ("crop_cpu_s", "crop_flip", "100 % crop: FLIP vs render CPU s"),
-              ("build_cpu_s", "crop_peak_mb", "render peak MB vs build CPU s")]
+    # against memory, not time: on the shared machine the render times swing with others' load
+    fig, ax = plt.subplots(1, 2, figsize=(8, 3.4), dpi=90)
+    panels = [("frame_peak_mb", "frame_flip", "whole frame 216x384: FLIP vs render peak MB"),
+              ("crop_peak_mb", "crop_flip", "100 % crop of 1080x1920: FLIP vs render peak MB")]
     for knob in dict.fromkeys(r["knob"] for r in rows if r["knob"] not in ("reference", "noise floor")):
         sel = [r for r in rows if r["knob"] in (knob, "reference")]
         for a, (x, y, title) in zip(ax, panels):
@@ -222,9 +237,9 @@ def plot(rows: list[dict], path: Path, floor: dict) -> None:
             for r in sel[1:]:
                 a.annotate(str(r["value"]), (r[x], r[y]), fontsize=6)
             a.set_title(title, fontsize=8)
-            a.set_xlabel(x)
+            a.set_xlabel("render peak MB")
             a.grid(True, alpha=0.3)
-    for a, key in zip(ax[:2], ("frame_flip", "crop_flip")):
+    for a, key in zip(ax, ("frame_flip", "crop_flip")):
         a.axhline(floor[key], ls="--", c="grey", lw=0.8, label="noise floor (other seed)")
     ax[0].legend(fontsize=6)
     fig.tight_layout()
@@ -240,7 +255,8 @@ def main() -> int:
     ap.add_argument("--res", default="216x384", help="the whole frame's resolution")
     ap.add_argument("--knobs", help=f"comma-separated subset of {','.join(KNOBS)}")
     ap.add_argument("--levels", action="store_true", help="measure the recipe's named detail levels")
-    ap.add_argument("--from-csv", type=Path, help="only remake the table and plot from this CSV")
+    ap.add_argument("--from-csv", type=Path, help="only remake the table and plot from this CSV "
+                    "(a run resumes by itself: variants already in <out>/asset_study.csv are skipped)")
     a = ap.parse_args()
     a.out.mkdir(parents=True, exist_ok=True)
     name = "asset_levels" if a.levels else "asset_study"
@@ -251,23 +267,25 @@ def main() -> int:
         return 0
     t0 = time.perf_counter()
     rows, refs = reference(a)
-    ref_dir = a.out / "reference"
+    ref_dir, csv_path = a.out / "reference", a.out / f"{name}.csv"
+    done = read_rows(csv_path) if csv_path.is_file() else []
+    if not done:
+        write_rows(csv_path, rows)
     print("\n".join(table(rows)), flush=True)
     for knob, value, overrides, level in variants(a):
+        if any(r["knob"] == knob and r["value"] == str(value) for r in done):
+            continue                            # measured by an earlier, interrupted run
         folder = a.out / f"{knob}_{value}"
         recipe = stage(folder, ref_dir, overrides or {})
         row = {"knob": knob, "value": value, **build(recipe, level)}
         row.update(measure(folder, refs, a.spp, a.seed, a.res))
         rows.append(row)
+        write_rows(csv_path, [row])
         print(table([row])[-1], flush=True)
         for exr in folder.glob("*.exr"):
             exr.rename(a.out / f"{knob}_{value}_{exr.name}")
         shutil.rmtree(folder)                   # the assets: up to 150 MB a variant
-    with open(a.out / f"{name}.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    write_report(rows, a.out, name, head)
+    write_report(read_rows(csv_path), a.out, name, head)
     print(f"\nwrote {a.out}/{name}.csv, .md, .png in {time.perf_counter() - t0:.0f} s")
     return 0
 
