@@ -6,7 +6,7 @@ A recipe is a JSON file beside a scene (``scenes/beach.recipe.json`` for ``scene
       "recipe": 1,
       "assets": [
         {"name": "sky", "generator": "sky", "seed": 0, "out": "assets/beach/sky",
-         "params": {"elevation_deg": 32, "resolution": 512}, "quick": {"resolution": 64}},
+         "params": {"elevation_deg": 32, "resolution": 512}, "levels": {"quick": {"resolution": 64}}},
         {"name": "lights", "generator": "sky-lights", "out": "assets/beach/lights",
          "params": {"sky": "assets/beach/sky", "scale": 0.03}}
       ]
@@ -18,8 +18,16 @@ field's type), plus ``preview`` for generators that write PNG previews; ``seed``
 ``out`` is the output folder, relative to the recipe's folder and inside its ``assets/``
 (git-ignored). Entries build in order, each through its generator's ``build`` with the recipe's
 folder as the base for relative input paths, so a parameter that names a file written by an
-earlier entry (``"dunes": "assets/beach/dunes/dunes_height.exr"``) just works. ``quick`` holds
-parameter overrides for fast, small builds (tests, previews).
+earlier entry (``"dunes": "assets/beach/dunes/dunes_height.exr"``) just works.
+
+Detail levels: an entry's ``levels`` maps a level name to parameter overrides, applied over
+``params`` when the recipe is built ``--level NAME`` (an entry without overrides for that level
+builds as written, so ``"final": {}`` means the params themselves). A recipe may declare its
+levels at the top, ``"levels": {"draft": "what it is for", ...}``; then every entry's level names
+must be declared ones. The level ``quick`` (small, fast builds for tests) is always known, and an
+entry's ``"quick": {...}`` is shorthand for ``"levels": {"quick": {...}}``. Every level of every
+entry is validated on load, whichever is built. The level's name is not part of the rebuild hash,
+only the parameters it gives, so a level whose parameters equal the defaults reuses their build.
 
 An entry is rebuilt only when its stamp (``<out>/.recipe-stamp.json``) is missing, any output
 the stamp lists is missing, or the stamp's hash differs from the entry's hash now. The hash
@@ -30,7 +38,7 @@ parameters name; so editing the recipe, a generator, a helper it uses, or an ups
 rebuilds exactly what depends on it. Generators are pure functions of (parameters, seed), so a
 rebuild gives the same bytes.
 
-    assets-gen recipe scenes/beach.recipe.json [--force] [--quick] [--only NAME ...]
+    assets-gen recipe scenes/beach.recipe.json [--force] [--level NAME | --quick] [--only NAME ...]
 """
 from __future__ import annotations
 
@@ -52,7 +60,9 @@ from renderer.errors import RenderError
 
 RECIPE_FORMAT = 1
 STAMP = ".recipe-stamp.json"
-_ENTRY_KEYS = {"name", "generator", "seed", "out", "params", "quick", "comment"}
+_ENTRY_KEYS = {"name", "generator", "seed", "out", "params", "levels", "quick", "comment"}
+#: The level every recipe has, declared or not: small, fast builds for tests.
+QUICK = "quick"
 #: Packages whose modules' sources a rebuild hash covers.
 _HASHED_PACKAGES = ("assets_gen", "renderer")
 
@@ -64,7 +74,7 @@ class RecipeError(GeneratorError):
 @dataclass
 class Entry:
     """One asset of a recipe, validated; ``params`` (as written, keys with ``_``) already has any
-    ``quick`` overrides applied, and ``values`` is the generator's parameter dataclass made from it."""
+    level's overrides applied, and ``values`` is the generator's parameter dataclass made from it."""
     name: str
     generator: str
     seed: int
@@ -73,6 +83,7 @@ class Entry:
     index: int
     values: Params
     preview: bool = True
+    level: str | None = None      # the detail level whose overrides these are; None: as written
 
     def label(self) -> str:
         return f"asset {self.index} {self.name!r} ({self.generator})"
@@ -89,8 +100,8 @@ class Result:
 # Reading a recipe
 # --------------------------------------------------------------------------------------------
 
-def load(path: str | Path, quick: bool = False) -> list[Entry]:
-    """The validated entries of the recipe at ``path`` (``quick``: with their quick overrides)."""
+def load(path: str | Path, level: str | None = None) -> list[Entry]:
+    """The validated entries of the recipe at ``path``, with the overrides of ``level`` (None: as written)."""
     path = Path(path)
     if not path.is_file():
         raise RecipeError(f"recipe {path} not found")
@@ -107,23 +118,42 @@ def load(path: str | Path, quick: bool = False) -> list[Entry]:
     if doc.get("recipe", RECIPE_FORMAT) != RECIPE_FORMAT:
         raise RecipeError(f'{path}: unsupported "recipe" format {doc.get("recipe")!r} '
                           f"(this version reads {RECIPE_FORMAT})")
+    declared = _declared_levels(doc, path)
     entries: list[Entry] = []
     outs: dict[str, str] = {}
+    used: set[str] = {QUICK}
     for i, raw in enumerate(doc["assets"]):
         where = f"asset {i}" + (f" {raw.get('name')!r}" if isinstance(raw, dict) and "name" in raw else "")
         try:
-            entry = _entry(raw, i, quick, {e.name for e in entries})
+            entry, names = _entry(raw, i, level, {e.name for e in entries}, declared)
         except GeneratorError as e:
             raise RecipeError(f"{path}: {where}: {e}") from None
+        used |= names
         if entry.out in outs:
             raise RecipeError(f"{path}: {where}: output folder {entry.out!r} is already used by "
                               f"{outs[entry.out]!r} (each asset needs its own folder: manifests would collide)")
         outs[entry.out] = entry.name
         entries.append(entry)
+    known = used if declared is None else declared | {QUICK}
+    if level is not None and level not in known:
+        raise RecipeError(f"{path}: no detail level {level!r}; its levels: {sorted(known)}")
     return entries
 
 
-def _entry(raw: Any, index: int, quick: bool, names: set[str]) -> Entry:
+def _declared_levels(doc: dict, path: Path) -> set[str] | None:
+    """The level names the recipe declares at its top, or None when it declares none."""
+    if "levels" not in doc:
+        return None
+    decl = doc["levels"]
+    if not isinstance(decl, dict) or not all(isinstance(v, str) for v in decl.values()):
+        raise RecipeError(f'{path}: "levels" must be an object of level name: description')
+    return set(decl)
+
+
+def _entry(raw: Any, index: int, level: str | None, names: set[str],
+           declared: set[str] | None) -> tuple[Entry, set[str]]:
+    """One entry of a recipe and the level names it uses, or :class:`GeneratorError` saying what
+    is wrong with it."""
     """One entry of a recipe, or :class:`GeneratorError` saying what is wrong with it."""
     if not isinstance(raw, dict):
         raise GeneratorError("expected an object")
@@ -143,21 +173,44 @@ def _entry(raw: Any, index: int, quick: bool, names: set[str]) -> Entry:
     norm = os.path.normpath(out).replace(os.sep, "/")
     if Path(out).is_absolute() or not norm.startswith("assets/") or ".." in Path(norm).parts:
         raise GeneratorError(f'"out" must be a folder inside assets/ beside the recipe, got {out!r}')
-    params, overrides = raw.get("params", {}), raw.get("quick", {})
-    for key, val in (("params", params), ("quick", overrides)):
+    params = raw.get("params", {})
+    overrides = _entry_levels(raw, declared)
+    for key, val in (("params", params), *((f"levels.{k}", v) for k, v in overrides.items())):
         if not isinstance(val, dict):
             raise GeneratorError(f'"{key}" must be an object of parameter: value')
         for k in val:
             if k in ("seed", "out"):
                 raise GeneratorError(f'give "{k}" as a key of the entry, not in "{key}"')
-    eff = {k.replace("-", "_"): v for k, v in params.items()}
-    if quick:
-        eff.update({k.replace("-", "_"): v for k, v in overrides.items()})
-    values = {k: v for k, v in eff.items() if not (gen.previews and k == "preview")}
-    preview = eff.get("preview", True) if gen.previews else True
-    if not isinstance(preview, bool):
-        raise GeneratorError(f"parameter 'preview': expected true or false, got {preview!r}")
-    return Entry(name, gen.name, seed, norm, eff, index, gen.params.from_dict(values), preview)
+    base = {k.replace("-", "_"): v for k, v in params.items()}
+    made: dict[str | None, Entry] = {}
+    for lvl in [None, *overrides]:            # every level is checked, the one asked for is kept
+        eff = {**base, **{k.replace("-", "_"): v for k, v in overrides.get(lvl, {}).items()}}
+        try:
+            values = {k: v for k, v in eff.items() if not (gen.previews and k == "preview")}
+            preview = eff.get("preview", True) if gen.previews else True
+            if not isinstance(preview, bool):
+                raise GeneratorError(f"parameter 'preview': expected true or false, got {preview!r}")
+            made[lvl] = Entry(name, gen.name, seed, norm, eff, index, gen.params.from_dict(values), preview, lvl)
+        except GeneratorError as e:
+            raise GeneratorError(f"level {lvl!r}: {e}" if lvl is not None else str(e)) from None
+    return made[level if level in overrides else None], set(overrides)
+
+
+def _entry_levels(raw: dict, declared: set[str] | None) -> dict[str, Any]:
+    """An entry's level overrides by level name (``quick`` folded in), names checked."""
+    found = raw.get("levels", {})
+    if not isinstance(found, dict):
+        raise GeneratorError('"levels" must be an object of level name: {parameter: value}')
+    if "quick" in raw:
+        if QUICK in found:
+            raise GeneratorError('"quick" given twice: as a key of the entry and in "levels"')
+        found = {**found, QUICK: raw["quick"]}
+    if declared is not None:
+        stray = sorted(set(found) - declared - {QUICK})
+        if stray:
+            raise GeneratorError(f"level(s) {stray} not declared in the recipe's \"levels\": "
+                                 f"{sorted(declared | {QUICK})}")
+    return found
 
 
 # --------------------------------------------------------------------------------------------
@@ -302,13 +355,17 @@ def is_current(out: Path, digest: str) -> bool:
 
 
 def build(recipe: str | Path, *, root: str | Path | None = None, force: bool = False, quick: bool = False,
-          only: list[str] | None = None, log: Callable[[str], None] | None = print) -> list[Result]:
+          level: str | None = None, only: list[str] | None = None,
+          log: Callable[[str], None] | None = print) -> list[Result]:
     """Build the recipe's out-of-date entries, in order. ``root``: the folder that ``out`` and
     relative parameters resolve against (default: the recipe's folder; tests point it elsewhere).
-    ``force`` rebuilds everything, ``quick`` applies each entry's quick overrides, ``only``
-    restricts the build to the named entries. Raises :class:`RecipeError` naming the entry."""
+    ``force`` rebuilds everything, ``level`` applies each entry's overrides for that detail level
+    (``quick``: the same as ``level="quick"``), ``only`` restricts the build to the named entries.
+    Raises :class:`RecipeError` naming the entry."""
     recipe = Path(recipe).resolve() if Path(recipe).exists() else Path(recipe)
-    entries = load(recipe, quick=quick)
+    if quick and level not in (None, QUICK):
+        raise RecipeError(f"{recipe}: quick and level {level!r} both asked for; give one")
+    entries = load(recipe, level=QUICK if quick else level)
     if only:
         missing = sorted(set(only) - {e.name for e in entries})
         if missing:
@@ -338,6 +395,8 @@ def build(recipe: str | Path, *, root: str | Path | None = None, force: bool = F
                     (out / stale).unlink(missing_ok=True)
             stamp = {"recipe": recipe.name, "name": e.name, "generator": e.generator, "seed": e.seed,
                      "params": e.params, "hash": digest, "outputs": names}
+            if e.level is not None:
+                stamp["level"] = e.level
             (out / STAMP).write_text(json.dumps(stamp, indent=2, sort_keys=True, default=str) + "\n")
             results.append(Result(e, True, [out / n for n in names]))
         except GeneratorError as err:
@@ -366,7 +425,7 @@ def _run(args: argparse.Namespace) -> list[str]:
             if found is None:
                 continue
             r = found
-        for res in build(r, force=args.force, quick=args.quick, only=args.only,
+        for res in build(r, force=args.force, level=QUICK if args.quick else args.level, only=args.only,
                          log=lambda m: print(m, file=sys.stderr)):
             if res.built:
                 written += [str(p) for p in res.outputs]
@@ -380,7 +439,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                    help="recipe JSON file(s), or a .pbrt scene whose <scene>.recipe.json to build "
                         "(a scene without one is skipped)")
     p.add_argument("--force", action="store_true", help="rebuild every entry")
-    p.add_argument("--quick", action="store_true", help="apply each entry's quick (small, fast) overrides")
+    lv = p.add_mutually_exclusive_group()
+    lv.add_argument("--level", metavar="NAME", help="apply each entry's overrides for this detail level "
+                    "(the beach's: draft, preview, final; docs/assets.md)")
+    lv.add_argument("--quick", action="store_true", help="the same as --level quick: small, fast assets for tests")
     p.add_argument("--only", action="append", metavar="NAME", help="build only this entry (repeatable)")
     p.set_defaults(run=_run)
     return p

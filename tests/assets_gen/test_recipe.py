@@ -255,3 +255,107 @@ def test_generator_reading_a_bad_scene_names_the_entry(tmp_path):
          "params": {"surface": "assets/d/dunes.ply", "scene": "view.pbrt", "count": 10, "preview": False}}])
     with pytest.raises(RecipeError, match=r"scene.recipe.json: asset 1 'grains' \(grains\): .*orthographic"):
         recipe.build(r, log=None)
+
+
+def _levelled(tmp: Path, sky_levels: dict, declared: dict | None = None, name: str = "scene.recipe.json") -> Path:
+    assets = _small(sky_res=32)
+    assets[0]["levels"] = sky_levels
+    doc: dict = {"recipe": 1, "assets": assets}
+    if declared is not None:
+        doc["levels"] = declared
+    path = tmp / name
+    path.write_text(json.dumps(doc, indent=1))
+    return path
+
+
+def test_level_overrides_apply_and_a_level_without_overrides_is_the_recipe(tmp_path):
+    r = _levelled(tmp_path, {"draft": {"resolution": 8}, "final": {}},
+                  {"draft": "small", "preview": "medium", "final": "as written"})
+    assert [x.built for x in recipe.build(r, level="draft", log=None)] == [True, True, True]
+    stamp = json.loads((tmp_path / "assets/t/sky" / recipe.STAMP).read_text())
+    assert stamp["params"]["resolution"] == 8 and stamp["level"] == "draft"
+    draft_sky = (tmp_path / "assets/t/sky/sky_latlong.exr").read_bytes()
+    # the default build rebuilds the sky (and the lights that read it), not the glasses
+    assert [x.built for x in recipe.build(r, log=None)] == [True, True, False]
+    assert (tmp_path / "assets/t/sky/sky_latlong.exr").read_bytes() != draft_sky
+    default = _snapshot(tmp_path / "assets")
+    # "final" (no overrides) and "preview" (declared, no entry overrides it) are the recipe as written
+    for level in ("final", "preview"):
+        assert [x.built for x in recipe.build(r, level=level, log=None)] == [False, False, False]
+    assert _snapshot(tmp_path / "assets") == default
+    assert recipe.load(r, level="final")[0].params == recipe.load(r)[0].params
+
+
+def test_level_build_is_deterministic(tmp_path):
+    r = _levelled(tmp_path, {"draft": {"resolution": 8}})
+    recipe.build(r, root=tmp_path / "a", level="draft", log=None)
+    recipe.build(r, root=tmp_path / "b", level="draft", log=None)
+    a = {k: v[1] for k, v in _snapshot(tmp_path / "a/assets").items()}
+    b = {k: v[1] for k, v in _snapshot(tmp_path / "b/assets").items()}
+    assert a == b and len(a) >= 8
+
+
+def test_quick_is_a_level(tmp_path):
+    """``quick`` as an entry key and as a level are the same overrides, and always known."""
+    as_key = _small(sky_res=64)
+    as_key[0]["quick"] = {"resolution": 8}
+    r1 = _recipe(tmp_path, as_key, "key.recipe.json")
+    r2 = _levelled(tmp_path, {"quick": {"resolution": 8}}, {"draft": "d"}, "level.recipe.json")
+    for r in (r1, r2):
+        assert recipe.load(r, level="quick")[0].params["resolution"] == 8
+        assert recipe.build(r, root=tmp_path / r.stem, quick=True, log=None)[0].entry.params["resolution"] == 8
+    with pytest.raises(RecipeError, match="give one"):
+        recipe.build(r1, quick=True, level="draft", log=None)
+
+
+@pytest.mark.parametrize("sky_levels, declared, level, message", [
+    ({"draft": {"resolution": 8}}, None, "drat", "no detail level 'drat'; its levels: ['draft', 'quick']"),
+    ({}, {"draft": "d", "final": "f"}, "fnal", "no detail level 'fnal'; its levels: ['draft', 'final', 'quick']"),
+    ({"draft": {"no_such": 1}}, None, None, "asset 0 'sky': level 'draft': unknown parameter(s) ['no_such']"),
+    ({"draft": {"resolution": "big"}}, None, "quick",
+     "asset 0 'sky': level 'draft': parameter 'resolution': expected an integer, got 'big'"),
+    ({"draft": {"seed": 3}}, None, None, 'give "seed" as a key of the entry, not in "levels.draft"'),
+    ({"draft": [1]}, None, None, '"levels.draft" must be an object'),
+    ({"preveiw": {"resolution": 8}}, {"preview": "p"}, None,
+     "asset 0 'sky': level(s) ['preveiw'] not declared in the recipe's \"levels\": ['preview', 'quick']"),
+])
+def test_bad_level_gives_a_located_error(tmp_path, sky_levels, declared, level, message):
+    """Every level of every entry is checked whichever is built, and the error names the recipe,
+    the entry and the level."""
+    r = _levelled(tmp_path, sky_levels, declared)
+    with pytest.raises(RecipeError) as e:
+        recipe.build(r, level=level, log=None)
+    assert message in str(e.value) and "scene.recipe.json" in str(e.value) and "\n" not in str(e.value)
+    assert not (tmp_path / "assets").exists()
+
+
+def test_bad_level_declaration_and_double_quick(tmp_path):
+    r = _levelled(tmp_path, {}, {"draft": 3})
+    with pytest.raises(RecipeError, match='"levels" must be an object of level name: description'):
+        recipe.load(r)
+    assets = _small()
+    assets[0].update({"quick": {"resolution": 8}, "levels": {"quick": {"resolution": 4}}})
+    with pytest.raises(RecipeError, match=r"asset 0 'sky': \"quick\" given twice"):
+        recipe.load(_recipe(tmp_path, assets))
+
+
+def test_cli_level(tmp_path, capsys):
+    r = _levelled(tmp_path, {"draft": {"resolution": 8}})
+    assert cli.main(["recipe", str(r), "--level", "draft"]) == 0
+    assert json.loads((tmp_path / "assets/t/sky" / recipe.STAMP).read_text())["params"]["resolution"] == 8
+    capsys.readouterr()
+    assert cli.main(["recipe", str(r), "--level", "nosuch"]) == 2
+    assert "no detail level 'nosuch'" in capsys.readouterr().err
+
+
+def test_beach_levels_all_validate():
+    """Every named level of the beach recipe loads (validated parameters), and the level "final"
+    is the recipe as written: the final frame's assets."""
+    path = Path(__file__).resolve().parents[2] / "scenes" / "beach.recipe.json"
+    declared = json.loads(path.read_text())["levels"]
+    assert {"draft", "preview", "final"} <= set(declared)
+    default = [e.params for e in recipe.load(path)]
+    assert [e.params for e in recipe.load(path, level="final")] == default
+    for level in declared:
+        assert len(recipe.load(path, level=level)) == len(default)
+    assert [e.params for e in recipe.load(path, level="draft")] != default
