@@ -144,7 +144,11 @@ def _walk(top: bool, any_hit: bool, mesh_walk=None):
     farther than the best hit so far is dropped on pop; ``any_hit`` ends the walk at the first
     hit (shadow rays). A top-level leaf
     holds instances, each walked by ``mesh_walk`` (with its own stack) along ``r`` in object
-    space; a bottom-level leaf holds triangles. ``o``, ``d`` (the world ray) serve the top level."""
+    space; a bottom-level leaf holds triangles. ``o``, ``d`` (the world ray) serve the top level.
+    The bottom level never takes the instance branch, but Warp resolves every ``wp.static`` when the
+    function is declared (else it regenerates the code to hash it in each process), so there that
+    branch names ``leaf_range``: a resolvable function in a branch that is never compiled."""
+    descend = mesh_walk if mesh_walk is not None else leaf_range
 
     @wp.func
     def walk(bvh: WideBvh, inst_mesh: wp.array(dtype=int), inst_to_object: wp.array(dtype=wp.mat44),
@@ -183,7 +187,7 @@ def _walk(top: bool, any_hit: bool, mesh_walk=None):
                 for p in range(span[0], span[1]):
                     if wp.static(top):
                         i = bvh.tlas_inst[p]
-                        h = wp.static(mesh_walk)(bvh, inst_mesh, inst_to_object, bvh.mesh_root[inst_mesh[i]],
+                        h = wp.static(descend)(bvh, inst_mesh, inst_to_object, bvh.mesh_root[inst_mesh[i]],
                                                  o, d, instance_ray(inst_to_object[i], o, d), best.t)
                         if h.face >= 0:
                             best = h
