@@ -117,7 +117,7 @@ class SpectralRGB(_Sampled, tuple):
 
 class SpectralFloat(_Sampled, float):
     """A float parameter's luminance-weighted mean that keeps the spectrum it came from (a
-    dielectric's dispersive eta: :mod:`renderer.materials.dispersion`). Everything else sees the float."""
+    dielectric's dispersive eta: :mod:`renderer.optics.dispersion`). Everything else sees the float."""
 
     def __new__(cls, value: float, samples: np.ndarray) -> "SpectralFloat":
         self = super().__new__(cls, value)

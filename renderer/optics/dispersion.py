@@ -38,12 +38,12 @@ def is_dispersive(eta: object) -> bool:
     return bool(np.ptp(v) > 0.0)
 
 
-def eta_rows(eta: SpectralFloat, outside: float = 1.0) -> np.ndarray:
-    """The device rows of eta(λ) / outside (see the module docstring)."""
+def eta_rows(eta: SpectralFloat) -> np.ndarray:
+    """The device rows of eta(λ) (see the module docstring)."""
     lam = np.arange(LAMBDA_MIN_NM, LAMBDA_MAX_NM + 0.5 * STEP_NM, STEP_NM)
     rows = np.zeros((1 + len(lam), 4), np.float32)
     rows[0, :3] = (LAMBDA_MIN_NM, STEP_NM, len(lam))
-    rows[1:, 0] = eta.on_grid(lam) / outside
+    rows[1:, 0] = eta.on_grid(lam)
     return rows
 
 
