@@ -33,7 +33,7 @@ class Surface:
     err: float                               # Σ b_i |p_i|: the scale of the float32 error in p
 
 
-@wp.func
+@wp.func(inline=True)
 def intersect(geo: Geometry, o: wp.vec3, d: wp.vec3, t_max: float) -> Hit:
     """Closest hit along a unit-direction ray within (0, t_max); t is a world distance because
     the object-space direction keeps the world direction's scale."""
@@ -56,7 +56,7 @@ def intersect(geo: Geometry, o: wp.vec3, d: wp.vec3, t_max: float) -> Hit:
     return hit
 
 
-@wp.func
+@wp.func(inline=True)
 def occluded(geo: Geometry, o: wp.vec3, d: wp.vec3, t_max: float) -> bool:
     """Whether anything lies along the ray before t_max (shadow rays: any hit will do)."""
     query = wp.bvh_query_ray(geo.tlas, o, d)
@@ -69,7 +69,7 @@ def occluded(geo: Geometry, o: wp.vec3, d: wp.vec3, t_max: float) -> bool:
     return False
 
 
-@wp.func
+@wp.func(inline=True)
 def surface_at(geo: Geometry, hit: Hit, flip: bool) -> Surface:
     """Position, normals, UVs and UV tangents at a hit. Warp's barycentrics weight the triangle's
     vertices as (u, v, 1 - u - v). ``flip`` reverses the orientation (pbrt's ReverseOrientation)."""

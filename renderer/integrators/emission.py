@@ -44,7 +44,7 @@ def escaped_adder(mods: tuple[ModuleType, ...], ids: tuple[int, ...], mis: bool)
         return add_nothing
     escaped, kind, rest = mods[0].escaped, ids[0], escaped_adder(mods[1:], ids[1:], mis)
 
-    @wp.func
+    @wp.func(inline=True)
     def add_escaped(lights: Lights, o: wp.vec3, d: wp.vec3, beta: wp.vec3, sel: float, prev_pdf: float,
                     prev_specular: bool, L: wp.vec3) -> wp.vec3:
         acc = L
@@ -71,7 +71,7 @@ def emitted_adder(mods: tuple[ModuleType, ...], ids: tuple[int, ...], mis: bool)
         return add_nothing
     emitted, kind, rest = mods[0].emitted, ids[0], emitted_adder(mods[1:], ids[1:], mis)
 
-    @wp.func
+    @wp.func(inline=True)
     def add_emitted(lights: Lights, li: int, prev_p: wp.vec3, p: wp.vec3, ng: wp.vec3, wo: wp.vec3,
                     beta: wp.vec3, sel: float, prev_pdf: float, prev_specular: bool, L: wp.vec3) -> wp.vec3:
         if lights.kind[li] == wp.static(kind):

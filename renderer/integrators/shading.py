@@ -23,7 +23,7 @@ from renderer.textures import Textures, texture_eval
 BUMP_DELTA = 0.0005
 
 
-@wp.func
+@wp.func(inline=True)
 def load_bsdf(mat: Materials, tex: Textures, spectral: RgbWeightTable, spectral_n: int, m: int,
               s: Surface) -> BSDF:
     """Evaluate a material's parameter textures at the surface point (its uv, or for pbrt's
@@ -91,7 +91,7 @@ def shading_functions(features: Features) -> Shading:
     kinds = tuple(kinds)
     has_bump = features.bump
 
-    @wp.func
+    @wp.func(inline=True)
     def shading_frame(scene: Scene, m: int, s: Surface) -> Frame:
         ns = s.ns
         if wp.static(has_bump):

@@ -56,12 +56,12 @@ def blocked(scene: Scene, o: wp.vec3, d: wp.vec3, t_max: float) -> bool:
     return trace(scene, o, d, t_max).inst >= 0
 
 
-@wp.func
+@wp.func(inline=True)
 def _closest(scene: Scene, o: wp.vec3, d: wp.vec3, t_max: float) -> Hit:
     return intersect(scene.geo, o, d, t_max)
 
 
-@wp.func
+@wp.func(inline=True)
 def _occluded(scene: Scene, o: wp.vec3, d: wp.vec3, t_max: float) -> bool:
     return occluded(scene.geo, o, d, t_max)
 

@@ -39,7 +39,7 @@ def light_sampler(modules: tuple[ModuleType, ...], ids: tuple[int, ...]) -> wp.F
     with ``u_select`` and calls its module's ``sample``; only ``modules`` are compiled in."""
     pick = _switch(tuple(m.sample for m in modules), ids)
 
-    @wp.func
+    @wp.func(inline=True)
     def sample_light(lights: Lights, p: wp.vec3, u_select: float, u: wp.vec2) -> LightSample:
         n = lights.count
         i = wp.min(int(u_select * float(n)), n - 1)

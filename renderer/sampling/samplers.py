@@ -93,7 +93,7 @@ def _inverse_radical_inverse(x: int, base: int, digits: int) -> wp.int64:
     return r
 
 
-@wp.func
+@wp.func(inline=True)
 def start_sample(p: SamplerParams, seed: int, pixel: int, px: int, py: int, sample_index: int) -> PixelSample:
     s = PixelSample()
     s.block = sample_index / p.spp
@@ -176,7 +176,7 @@ def _jitter(p: SamplerParams, s: PixelSample, dim: int) -> float:
     return 0.5
 
 
-@wp.func
+@wp.func(inline=True)
 def get_1d(p: SamplerParams, s: PixelSample, dim: int) -> float:
     """Dimension ``dim`` of the path's sample."""
     if dim >= p.n_dims:
@@ -197,7 +197,7 @@ def get_1d(p: SamplerParams, s: PixelSample, dim: int) -> float:
     return to_unit(sobol_sample_bytes(p.byte_tables, 0, _zsobol_index(p, s, dim), p.randomize, seed))
 
 
-@wp.func
+@wp.func(inline=True)
 def get_2d(p: SamplerParams, s: PixelSample, dim: int) -> wp.vec2:
     """Dimensions ``dim`` and ``dim + 1``, drawn as one 2D point so their strata pair up."""
     if dim + 1 >= p.n_dims:
@@ -232,7 +232,7 @@ def _shifted(u: wp.vec2, s: PixelSample) -> wp.vec2:
     return wp.vec2(v[0] - wp.floor(v[0]), v[1] - wp.floor(v[1]))
 
 
-@wp.func
+@wp.func(inline=True)
 def get_pixel_2d(p: SamplerParams, s: PixelSample) -> wp.vec2:
     """The film position inside the pixel (dimensions 0-1)."""
     if p.kind == HALTON:

@@ -164,7 +164,7 @@ def _combine(T: Textures, tid: int, k: int, s: Stack, top: int, uv: wp.vec2, p: 
     return wp.cw_mul(T.scale[tid], a * t + b * (1.0 - t))
 
 
-@wp.func
+@wp.func(inline=True)
 def texture_eval(T: Textures, tid: int, uv: wp.vec2, p: wp.vec3, n: wp.vec3) -> wp.vec3:
     """The texture's value at surface coordinates uv, world point p and geometric normal n (float
     textures use the first channel)."""
