@@ -10,11 +10,15 @@ ifeq ($(SCENE),scenes/beach.pbrt)
 RES ?= 540x960
 SPP ?= 16
 FLAGS ?= --denoise
+# the recipe's preview detail level (docs/assets.md, "Detail levels of the beach"); LEVEL=final
+# or LEVEL= builds the assets as written, which the full frame needs
+LEVEL ?= preview
 endif
 OUT ?= out/$(notdir $(SCENE:.pbrt=.png))
 SPP ?=
 RES ?=
 FLAGS ?=
+LEVEL ?=
 
 .PHONY: render test fuzz install bench clean props demo figures
 
@@ -28,10 +32,11 @@ $(VENV)/.installed: pyproject.toml | $(BIN)/python
 
 install: $(VENV)/.installed
 
-# builds <scene>.recipe.json first when the scene has one (only out-of-date assets are made)
+# builds <scene>.recipe.json first when the scene has one (only out-of-date assets are made; the
+# assets folder holds one level at a time, so a level change rebuilds the entries it changes)
 render: install
 	@mkdir -p $(dir $(OUT))
-	$(BIN)/assets-gen recipe $(SCENE) >/dev/null
+	$(BIN)/assets-gen recipe $(SCENE) $(if $(LEVEL),--level $(LEVEL)) >/dev/null
 	$(BIN)/render $(SCENE) -o $(OUT) $(if $(SPP),--spp $(SPP)) $(if $(RES),--res $(RES)) $(FLAGS)
 
 # the props contact sheet (docs/images/props.png is this: 800x220, 64 spp, denoised)

@@ -59,7 +59,7 @@ KNOBS: dict[str, tuple[list, object]] = {
     "grain_subdivisions": ([2, 0], lambda v: {"grains": {"subdivisions": v}}),
     "dune_spacing_m": ([0.15, 0.3, 0.6], lambda v: {"dunes": {"spacing": v}}),
     "ripple_pixels_per_edge": ([1.5, 3, 6], lambda v: {"sand": {"pixels_per_edge": v}}),
-    "ripple_map_px": ([4096, 1024], lambda v: {"ripples": {"max_map_size": v}}),
+    "ripple_map_px": ([4096, 2048, 1024], lambda v: {"ripples": {"max_map_size": v}}),
     "texture_maps_div": ([1, 4], _texture_maps),
 }
 
@@ -213,8 +213,22 @@ def write_rows(path: Path, rows: list[dict]) -> None:
         w.writerows(rows)
 
 
+def ordered(rows: list[dict]) -> list[dict]:
+    """The rows in KNOBS' order, each knob's values as listed there (a resumed run appends a value
+    added later at the end of the CSV); other rows (the reference, the levels) keep their order."""
+    def key(i_r: tuple[int, dict]) -> tuple:
+        i, r = i_r
+        if r["knob"] not in KNOBS:
+            return (-1, i)
+        values = [str(v) for v in KNOBS[r["knob"]][0]]
+        rank = values.index(r["value"]) if r["value"] in values else len(values)
+        return (list(KNOBS).index(r["knob"]), rank, i)
+    return [r for _, r in sorted(enumerate(rows), key=key)]
+
+
 def write_report(rows: list[dict], out: Path, name: str, head: str) -> None:
     """``name``.md (the table under ``head``) and ``name``.png in ``out``."""
+    rows = ordered(rows)
     (out / f"{name}.md").write_text("\n".join([head, "", *table(rows)]) + "\n")
     plot(rows, out / f"{name}.png", next(r for r in rows if r["knob"] == "noise floor"))
 
@@ -226,7 +240,8 @@ def plot(rows: list[dict], path: Path, floor: dict) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    # against memory, not time: on the shared machine the render times swing with others' load
+    # against memory, not time: no knob moved render time beyond the spread of repeated runs
+    # (docs/study.md), and render times swing with the shared machine's load
     fig, ax = plt.subplots(1, 2, figsize=(8, 3.4), dpi=90)
     panels = [("frame_peak_mb", "frame_flip", "whole frame 216x384: FLIP vs render peak MB"),
               ("crop_peak_mb", "crop_flip", "100 % crop of 1080x1920: FLIP vs render peak MB")]
@@ -258,6 +273,7 @@ def main() -> int:
     ap.add_argument("--from-csv", type=Path, help="only remake the table and plot from this CSV "
                     "(a run resumes by itself: variants already in <out>/asset_study.csv are skipped)")
     a = ap.parse_args()
+    a.out = a.out.resolve()                     # the builds and renders run with the variant folder as cwd
     a.out.mkdir(parents=True, exist_ok=True)
     name = "asset_levels" if a.levels else "asset_study"
     head = (f"Beach assets, {a.spp} spp, seed {a.seed}; frame {a.res}, crop {CROP} of 1080x1920. "
