@@ -4,8 +4,8 @@ VENV := .venv
 BIN := $(VENV)/bin
 export WARP_CACHE_PATH ?= $(CURDIR)/.warp-cache
 SCENE ?= scenes/beach.pbrt
-# the beach renders as a CPU preview by default; the full frame is
-# `render scenes/beach.pbrt -o beach.exr --spp 4096 --device cuda`
+# the beach renders as a CPU preview by default; the full frame is `assets-gen recipe
+# scenes/beach.pbrt` (the final level) then `render scenes/beach.pbrt -o beach.exr --spp 4096 --device cuda`
 ifeq ($(SCENE),scenes/beach.pbrt)
 RES ?= 540x960
 SPP ?= 16

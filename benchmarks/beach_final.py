@@ -27,8 +27,11 @@ CROP = 320                                   # 100 % crops: CROP x CROP pixels o
 
 
 def render(spp: int, minutes: float, threads: int | None) -> int:
-    """One time-boxed session of the final render; resumes when a checkpoint exists."""
+    """One time-boxed session of the final render; resumes when a checkpoint exists. The assets
+    are built at the recipe's final level first: ``make render`` leaves the preview level there."""
     OUT.mkdir(parents=True, exist_ok=True)
+    subprocess.check_call([sys.executable, "-m", "assets_gen", "recipe", str(SCENE)], cwd=ROOT,
+                          stdout=subprocess.DEVNULL)
     ckpt = OUT / "beach_final.ckpt.npz"
     cmd = [sys.executable, "-m", "renderer", str(SCENE), "-o", str(OUT / "beach_final.exr"),
            "--res", "1080x1920", "--spp", str(spp), "--checkpoint", str(ckpt), "--checkpoint-every", "300",
