@@ -149,7 +149,8 @@ class SkyParams(Params):
     utc_offset_h: float = param(0.0, "hours the local clock is ahead of UTC, with --date")
     latitude_deg: float = param(0.0, "latitude (north positive), degrees, with --date")
     longitude_deg: float = param(0.0, "longitude (east positive), degrees, with --date")
-    north_azimuth_deg: float = param(90.0, "light-frame azimuth of geographic north (+x towards +y), degrees")
+    north_azimuth_deg: float = param(90.0, "light-frame azimuth of geographic north (+x towards +y); "
+                                   "bearings add to it, degrees")
     turbidity: float = param(3.0, "atmospheric turbidity, 2..10")
     resolution: int = param(512, "map height in pixels")
     layout: str = param("both", "which maps to write", choices=("both", "latlong", "equal-area"))
@@ -176,12 +177,18 @@ class SkyParams(Params):
         return sun_position(when, self.latitude_deg, self.longitude_deg)
 
     def sun_angles(self) -> tuple[float, float]:
-        """(elevation, light-frame azimuth) in degrees: given, or from the date. The light frame
-        turns counter-clockwise seen from above, the compass clockwise."""
+        """(elevation, light-frame azimuth) in degrees: given, or from the date."""
         if not self.date:
             return self.elevation_deg, self.azimuth_deg
         pos = self.sun()
-        return pos.elevation_deg, (self.north_azimuth_deg - pos.azimuth_deg) % 360.0
+        return pos.elevation_deg, light_azimuth(pos.azimuth_deg, self.north_azimuth_deg)
+
+
+def light_azimuth(bearing_deg: float, north_azimuth_deg: float) -> float:
+    """The light-frame azimuth of a compass bearing. pbrt's world is left-handed (LookAt puts
+    up × forward on the image's right), so seen from above in a render the light frame's azimuth
+    turns clockwise, as bearings do: a bearing adds to north's azimuth."""
+    return (north_azimuth_deg + bearing_deg) % 360.0
 
 
 def write(job: Job) -> list[str]:

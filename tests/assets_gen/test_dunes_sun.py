@@ -13,7 +13,9 @@ import trimesh
 
 from assets_gen.cli import main
 from assets_gen.core import GeneratorError
+from assets_gen.sky import light_azimuth, sun_direction
 from assets_gen.solar_position import sidereal_time_deg, sun_equatorial, sun_position
+from renderer.scene.transform import look_at, rotate
 
 BARCHANOID = ["--size-x", "30", "--size-z", "20", "--spacing", "0.15", "--dune-height", "1.6",
               "--dune-wavelength", "22", "--crest-x", "-6", "--crest-wander", "0.6", "--wander-size", "10",
@@ -107,7 +109,7 @@ def test_sky_from_a_date_points_its_sun_there(tmp_path):
     meta = json.loads((tmp_path / "sky.json").read_text())["params"]
     pos = sun_position(datetime(2025, 9, 20, 16, 0, tzinfo=timezone.utc), 44.59, -1.21)
     assert meta["solar_position"]["elevation_deg"] == pytest.approx(pos.elevation_deg)
-    phi, e = math.radians(120 - pos.azimuth_deg), math.radians(pos.elevation_deg)
+    phi, e = math.radians(120 + pos.azimuth_deg), math.radians(pos.elevation_deg)
     d = meta["sun"]["direction_light_frame"]
     assert np.allclose(d, [math.cos(e) * math.cos(phi), math.cos(e) * math.sin(phi), math.sin(e)], atol=1e-9)
     assert run("sky", *args[:2], "--local-time", "23:30", "--utc-offset-h", "2", "--latitude-deg", "44.59",
@@ -115,3 +117,16 @@ def test_sky_from_a_date_points_its_sun_there(tmp_path):
     with pytest.raises(GeneratorError):
         from assets_gen.solar_position import parse_local_time
         parse_local_time("2025-13-01", "18:00", 0)
+
+
+@pytest.mark.parametrize("north", [0.0, 120.0, 342.0])
+def test_a_sun_east_of_the_view_is_right_of_the_image_centre(north):
+    """Compass bearings turn clockwise seen from above. Facing north through the renderer's own
+    LookAt (pbrt's, left-handed), a sun at bearing 60 must land right of the image centre and one
+    at bearing 300 left of it: a mirrored light frame would swap them."""
+    to_world = rotate(-90.0, np.array([1.0, 0.0, 0.0]), None)[:3, :3]   # the scene's "Rotate -90 1 0 0"
+    facing = to_world @ sun_direction(0.0, light_azimuth(0.0, north))
+    camera = look_at(np.zeros(3), facing, np.array([0.0, 1.0, 0.0]), None)[:3, :3]
+    for bearing, side in ((60.0, 1.0), (300.0, -1.0)):
+        sun = camera @ to_world @ sun_direction(20.0, light_azimuth(bearing, north))
+        assert sun[2] > 0 and np.sign(sun[0]) == side   # ahead, and camera +x is raster right
