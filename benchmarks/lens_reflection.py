@@ -2,7 +2,8 @@
 of the mirror direction of the camera's rays at the lens front's vertices, by height bands of the
 lens, and where those rays are at a few horizontal distances. It is what chose what stands behind
 the camera in scenes/beach.pbrt (docs/scenes.md, "Composition"): only directions in these ranges
-can show in the lenses.
+can show in the lenses. It also prints the lens's luminous transmittance for the scene's tint and
+the category 3 tint it replaced (the coating's dispersion left out).
 
     python benchmarks/lens_reflection.py [--placement PATH]
 
@@ -16,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from renderer.scene.transform import from_pbrt_matrix
+from renderer.optics.arrays import multilayer_transmittance
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 ASSETS = SCENES / "assets" / "beach"
@@ -29,10 +30,17 @@ def camera_eye() -> np.ndarray:
     return np.array([float(x) for x in numbers[:3]])
 
 
-def placement(path: Path) -> np.ndarray:
-    """Object-to-world of a placement's pbrt include (its ConcatTransform)."""
-    values = re.search(r"ConcatTransform\s*\[([^\]]*)\]", path.read_text()).group(1).split()
-    return from_pbrt_matrix([float(v) for v in values])
+def luminous_transmittance(tint: float) -> float:
+    """D65 luminous transmittance at normal incidence of the lens of scenes/parts/beach_props.pbrt:
+    the 9-layer blue mirror on both faces (no interreflection) and one pass of a grey tint."""
+    import colour
+
+    lam = np.arange(380.0, 781.0, 5.0)
+    eta = [1.0] + [2.20, 1.448] * 4 + [2.20, 1.52]
+    t = multilayer_transmittance(np.ones_like(lam), lam, eta, [0.0] * len(eta), [45.2, 75.0] * 4 + [45.2])
+    y = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].align(colour.SpectralShape(380, 780, 5)).values[:, 1]
+    d65 = colour.SDS_ILLUMINANTS["D65"].copy().align(colour.SpectralShape(380, 780, 5)).values
+    return float((y * d65 * t * t * tint).sum() / (y * d65).sum())
 
 
 def mirror_directions(lens: trimesh.Trimesh, m: np.ndarray, eye: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -50,9 +58,11 @@ def mirror_directions(lens: trimesh.Trimesh, m: np.ndarray, eye: np.ndarray) -> 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--placement", type=Path, default=ASSETS / "sunglasses_placement" / "placement.pbrt")
+    ap.add_argument("--placement", type=Path, default=ASSETS / "sunglasses_placement" / "placement.npz")
     args = ap.parse_args()
-    m, eye = placement(args.placement), camera_eye()
+    m, eye = np.load(args.placement)["transform"], camera_eye()
+    for tint in (0.45, 0.21):   # the green of "rgb tint" now and before
+        print(f"tint {tint} per pass: luminous transmittance {luminous_transmittance(tint):.2f}")
     tilt = np.degrees(np.arcsin(m[1, 2] / np.linalg.norm(m[:3, 2])))
     print(f"lens axis (mesh +z) {tilt:.1f} deg above the horizontal")
     for name in ("lens_left", "lens_right"):
