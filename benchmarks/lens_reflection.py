@@ -2,44 +2,58 @@
 of the mirror direction of the camera's rays at the lens front's vertices, by height bands of the
 lens, and where those rays are at a few horizontal distances. It is what chose what stands behind
 the camera in scenes/beach.pbrt (docs/scenes.md, "Composition"): only directions in these ranges
-can show in the lenses. It also prints the lens's luminous transmittance for the scene's tint and
-the category 3 tint it replaced (the coating's dispersion left out).
+can show in the lenses. It also prints the lens's luminous transmittance, from the stack and tint
+that scenes/parts/beach_props.pbrt gives the "lens" material (or another tint, --tint).
 
-    python benchmarks/lens_reflection.py [--placement PATH]
+    python benchmarks/lens_reflection.py [--placement PATH] [--tint G ...]
 
 Azimuth 0 is world +x (behind the camera, which looks along -x); positive towards +z, the image's
 right. Geometry only (no occlusion, the lens front as a mirror): the same numbers on any machine.
+Needs the beach's assets (assets-gen recipe scenes/beach.pbrt).
 """
 import argparse
-import re
+import tempfile
 from pathlib import Path
 
 import numpy as np
 import trimesh
 
+from conch_pose import blocked
 from renderer.optics.arrays import multilayer_transmittance
+from renderer.scene import load_description
+from renderer.scene.description import MaterialDesc
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 ASSETS = SCENES / "assets" / "beach"
 
 
 def camera_eye() -> np.ndarray:
-    """The LookAt eye of the beach camera."""
-    text = (SCENES / "parts" / "beach_camera.pbrt").read_text()
-    numbers = re.search(r"^LookAt\s+([-\d.\s]+)", text, re.M).group(1).split()
-    return np.array([float(x) for x in numbers[:3]])
+    """The beach camera's position, as the renderer reads it."""
+    return load_description(SCENES / "parts" / "beach_camera_view.pbrt").camera.camera_to_world[:3, 3]
 
 
-def luminous_transmittance(tint: float) -> float:
-    """D65 luminous transmittance at normal incidence of the lens of scenes/parts/beach_props.pbrt:
-    the 9-layer blue mirror on both faces (no interreflection) and one pass of a grey tint."""
+def lens_material() -> MaterialDesc:
+    """The "lens" material of scenes/parts/beach_props.pbrt, as the renderer reads it."""
+    with tempfile.TemporaryDirectory() as tmp:
+        scene = Path(tmp) / "lens.pbrt"
+        scene.write_text(f'WorldBegin\nInclude "{SCENES / "parts" / "beach_props.pbrt"}"\n')
+        return next(m for m in load_description(scene).materials if m.name == "lens")
+
+
+def luminous_transmittance(lens: MaterialDesc, tint: float) -> float:
+    """D65 luminous transmittance at normal incidence of the lens: its coating (with the layers'
+    Cauchy dispersion, not the thickness map) on both faces, no interreflection, and one pass of a
+    grey tint."""
     import colour
 
+    v = lens.values
     lam = np.arange(380.0, 781.0, 5.0)
-    eta = [1.0] + [2.20, 1.448] * 4 + [2.20, 1.52]
-    t = multilayer_transmittance(np.ones_like(lam), lam, eta, [0.0] * len(eta), [45.2, 75.0] * 4 + [45.2])
-    y = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].align(colour.SpectralShape(380, 780, 5)).values[:, 1]
-    d65 = colour.SDS_ILLUMINANTS["D65"].copy().align(colour.SpectralShape(380, 780, 5)).values
+    eta = [1.0, *v["layer_eta"], float(np.ravel(v["eta_inner"])[0])]
+    t = multilayer_transmittance(np.ones_like(lam), lam, eta, [0.0] * len(eta), v["layer_thickness"],
+                                 v.get("layer_cauchyb"))
+    shape = colour.SpectralShape(380, 780, 5)
+    y = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape).values[:, 1]
+    d65 = colour.SDS_ILLUMINANTS["D65"].copy().align(shape).values
     return float((y * d65 * t * t * tint).sum() / (y * d65).sum())
 
 
@@ -56,15 +70,37 @@ def mirror_directions(lens: trimesh.Trimesh, m: np.ndarray, eye: np.ndarray) -> 
     return p, r, (p[:, 1] - p[:, 1].min()) / np.ptp(p[:, 1])
 
 
+def frame_behind(lens: trimesh.Trimesh, frame: trimesh.Trimesh, m: np.ndarray, eye: np.ndarray) -> np.ndarray:
+    """Per vertex of the lens front: whether the camera's line of sight through it, continued
+    straight past the 2 mm lens (its refraction shifts it by under 1 mm), meets the frame (a temple
+    or the rim behind): where the frame can show through the lens."""
+    front = lens.vertex_normals[:, 2] > 0.5
+    p = lens.vertices[front] @ m[:3, :3].T + m[:3, 3]
+    d = (p - eye) / np.linalg.norm(p - eye, axis=1)[:, None]
+    world = trimesh.Trimesh(frame.vertices @ m[:3, :3].T + m[:3, 3], frame.faces, process=False)
+    return blocked(world, p + 0.004 * d, d)
+
+
+def vertex_areas(lens: trimesh.Trimesh) -> np.ndarray:
+    """A third of the area of each face around each vertex of the lens front (the weights that
+    turn vertex counts into area fractions)."""
+    w = np.zeros(len(lens.vertices))
+    np.add.at(w, lens.faces.ravel(), np.repeat(lens.area_faces / 3.0, 3))
+    return w[lens.vertex_normals[:, 2] > 0.5]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--placement", type=Path, default=ASSETS / "sunglasses_placement" / "placement.npz")
+    ap.add_argument("--tint", type=float, nargs="*", default=[],
+                    help="other grey tints per pass to compare (the category 3 lens before 2026-12-02: 0.21)")
     args = ap.parse_args()
-    m, eye = np.load(args.placement)["transform"], camera_eye()
-    for tint in (0.45, 0.21):   # the green of "rgb tint" now and before
-        print(f"tint {tint} per pass: luminous transmittance {luminous_transmittance(tint):.2f}")
+    m, eye, lens_mat = np.load(args.placement)["transform"], camera_eye(), lens_material()
+    for tint in [float(lens_mat.values["tint"][1]), *args.tint]:   # the scene's: the green of its "rgb tint"
+        print(f"tint {tint} per pass: luminous transmittance {luminous_transmittance(lens_mat, tint):.2f}")
     tilt = np.degrees(np.arcsin(m[1, 2] / np.linalg.norm(m[:3, 2])))
     print(f"lens axis (mesh +z) {tilt:.1f} deg above the horizontal")
+    frame = trimesh.load(ASSETS / "sunglasses" / "frame.ply", process=False)
     for name in ("lens_left", "lens_right"):
         lens = trimesh.load(ASSETS / "sunglasses" / f"{name}.ply", process=False)
         p, r, height = mirror_directions(lens, m, eye)
@@ -77,6 +113,11 @@ def main() -> None:
             s = (height >= lo) & (height < lo + 0.2 + 1e-9)
             print(f"  {lo:.1f}-{lo + 0.2:.1f}      {elevation[s].min():6.0f} .. {elevation[s].max():3.0f}"
                   f"     {azimuth[s].min():5.0f} .. {azimuth[s].max():4.0f}")
+        behind, w = frame_behind(lens, frame, m, eye), vertex_areas(lens)
+        print(f"  the frame lies behind {w[behind].sum() / w.sum():.1%} of the lens front's area"
+              + "".join(f"; {(w * behind)[s].sum() / w[s].sum():.0%} of heights {lo:.1f}-{lo + 0.2:.1f}"
+                        for lo in np.arange(0.0, 1.0, 0.2)
+                        if (w * behind)[(s := (height >= lo) & (height < lo + 0.2 + 1e-9))].sum() > 0))
         up = elevation > 0
         for dist in (7.0, 14.0):
             t = dist / np.maximum(np.hypot(r[up, 0], r[up, 2]), 1e-9)
