@@ -10,39 +10,17 @@ the part of it that the sun also reaches; both by ray casts with Warp. docs/scen
 from __future__ import annotations
 
 import argparse
-import os
-from pathlib import Path
 
 import numpy as np
 import trimesh
 import warp as wp
 
-ROOT = Path(__file__).resolve().parents[1]
-os.environ.setdefault("WARP_CACHE_PATH", str(ROOT / ".warp-cache"))
+from beach_scene import ASSETS, blocked, camera_eye, recipe_params, sun_direction
+from assets_gen.terrain.placement import PlacementParams, place
 
-from assets_gen.terrain.placement import PlacementParams, place  # noqa: E402
-
-ASSETS = ROOT / "scenes" / "assets" / "beach"
-CAMERA = np.array([-4.5, 0.14, 6.0])                    # parts/beach_camera.pbrt's LookAt eye
-SUN = np.array([-0.585536, 0.36097, 0.725843])          # towards the sun (assets/beach/lights)
-POSITION = (-4.85, 5.93)                                # the recipe's conch position (x, z)
-
-
-@wp.kernel
-def _any_hit(mesh: wp.uint64, o: wp.array(dtype=wp.vec3), d: wp.array(dtype=wp.vec3), out: wp.array(dtype=wp.int32)):
-    i = wp.tid()
-    if wp.mesh_query_ray(mesh, o[i], d[i], 10.0).result:
-        out[i] = 1
-
-
-def blocked(m: trimesh.Trimesh, o: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """Whether each ray (o, d) hits ``m``."""
-    mesh = wp.Mesh(points=wp.array(m.vertices.astype(np.float32), dtype=wp.vec3),
-                   indices=wp.array(m.faces.astype(np.int32).ravel(), dtype=wp.int32))
-    out = wp.zeros(len(o), dtype=wp.int32)
-    wp.launch(_any_hit, len(o), [mesh.id, wp.array(o.astype(np.float32), dtype=wp.vec3),
-                                 wp.array(d.astype(np.float32), dtype=wp.vec3), out])
-    return out.numpy() > 0
+CAMERA = camera_eye()
+SUN = sun_direction()                                   # towards the sun
+POSITION = tuple(recipe_params("conch-placement")["position"])   # (x, z)
 
 
 def score(yaw: float, tilt: tuple[float, float], sand_near: trimesh.Trimesh) -> tuple[float, float]:

@@ -12,32 +12,19 @@ right. Geometry only (no occlusion, the lens front as a mirror): the same number
 Needs the beach's assets (assets-gen recipe scenes/beach.pbrt).
 """
 import argparse
-import tempfile
 from pathlib import Path
 
 import numpy as np
 import trimesh
 
-from conch_pose import blocked
+from beach_scene import ASSETS, SCENES, blocked, camera_eye, load_fragment
 from renderer.optics.arrays import multilayer_transmittance
-from renderer.scene import load_description
 from renderer.scene.description import MaterialDesc
-
-SCENES = Path(__file__).resolve().parents[1] / "scenes"
-ASSETS = SCENES / "assets" / "beach"
-
-
-def camera_eye() -> np.ndarray:
-    """The beach camera's position, as the renderer reads it."""
-    return load_description(SCENES / "parts" / "beach_camera_view.pbrt").camera.camera_to_world[:3, 3]
 
 
 def lens_material() -> MaterialDesc:
     """The "lens" material of scenes/parts/beach_props.pbrt, as the renderer reads it."""
-    with tempfile.TemporaryDirectory() as tmp:
-        scene = Path(tmp) / "lens.pbrt"
-        scene.write_text(f'WorldBegin\nInclude "{SCENES / "parts" / "beach_props.pbrt"}"\n')
-        return next(m for m in load_description(scene).materials if m.name == "lens")
+    return next(m for m in load_fragment(SCENES / "parts" / "beach_props.pbrt").materials if m.name == "lens")
 
 
 def luminous_transmittance(lens: MaterialDesc, tint: float) -> float:
