@@ -53,8 +53,10 @@ figures:
 	$(MAKE) render SCENE=scenes/fig3_heightmaps.pbrt OUT=out/fig3_heightmaps.png
 	$(MAKE) render SCENE=scenes/fig8_bump.pbrt OUT=out/fig8_bump.png
 
+# on one pytest-xdist worker per CPU (JOBS=0: in this process); tests/conftest.py groups them by file
+JOBS ?= auto
 test: install
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n $(JOBS) --dist loadgroup
 
 # the hostile-input fuzzer at length (make test runs 60 seeded cases per kind); FUZZ_SEED picks another sequence
 fuzz: install

@@ -47,9 +47,11 @@ SHELL_MAPS = ("shell-height", "shell-pigment", "shell-bump")
 
 
 def _texture_maps(f: int) -> dict[str, dict]:
-    """The texture maps (sky, shell maps, lens thickness) at 1/f of the recipe's resolution."""
-    return {"sky": {"resolution": 512 // f}, "lens-thickness": {"resolution": 512 // f},
-            **{m: {"width": 1024 // f, "height": 1024 // f} for m in SHELL_MAPS}}
+    """The texture maps (sky, shell maps, lens thickness) at 1/f of the recipe's resolution (its
+    values as written, or the generators' defaults)."""
+    v = {e.name: e.values for e in recipe_entries(RECIPE)}
+    return {**{m: {"resolution": v[m].resolution // f} for m in ("sky", "lens-thickness")},
+            **{m: {"width": v[m].width // f, "height": v[m].height // f} for m in SHELL_MAPS}}
 
 
 #: knob -> (values, the overrides {entry: {param: value}} for a value); values[0] is the recipe's
