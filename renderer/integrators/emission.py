@@ -21,14 +21,14 @@ from renderer.vecmath import max3
 
 
 @wp.func
-def emission(beta: wp.vec3, e: LightEval, sel: float, prev_pdf: float, prev_specular: bool, mis: bool) -> wp.vec3:
+def emission(beta: wp.vec3, ev: LightEval, sel: float, prev_pdf: float, prev_specular: bool, mis: bool) -> wp.vec3:
     """Light a path finds on a light, MIS-weighted against next-event estimation (which could have
     sampled it unless the bounce that led here was specular)."""
     w = float(1.0)
     if mis:
         if not prev_specular:
-            w = power_heuristic(prev_pdf, e.pdf * sel)
-    return wp.cw_mul(beta, e.L) * w
+            w = power_heuristic(prev_pdf, ev.pdf * sel)
+    return wp.cw_mul(beta, ev.L) * w
 
 
 @lru_cache(maxsize=None)
@@ -50,9 +50,9 @@ def escaped_adder(mods: tuple[ModuleType, ...], ids: tuple[int, ...], mis: bool)
         acc = L
         for i in range(lights.count):
             if lights.kind[i] == wp.static(kind):
-                e = wp.static(escaped)(lights, i, o, d)
-                if max3(e.L) > 0.0:
-                    acc = acc + emission(beta, e, sel, prev_pdf, prev_specular, wp.static(mis))
+                ev = wp.static(escaped)(lights, i, o, d)
+                if max3(ev.L) > 0.0:
+                    acc = acc + emission(beta, ev, sel, prev_pdf, prev_specular, wp.static(mis))
         return wp.static(rest)(lights, o, d, beta, sel, prev_pdf, prev_specular, acc)
 
     return add_escaped
@@ -75,8 +75,8 @@ def emitted_adder(mods: tuple[ModuleType, ...], ids: tuple[int, ...], mis: bool)
     def add_emitted(lights: Lights, li: int, prev_p: wp.vec3, p: wp.vec3, ng: wp.vec3, wo: wp.vec3,
                     beta: wp.vec3, sel: float, prev_pdf: float, prev_specular: bool, L: wp.vec3) -> wp.vec3:
         if lights.kind[li] == wp.static(kind):
-            e = wp.static(emitted)(lights, li, prev_p, p, ng, wo)
-            return L + emission(beta, e, sel, prev_pdf, prev_specular, wp.static(mis))
+            ev = wp.static(emitted)(lights, li, prev_p, p, ng, wo)
+            return L + emission(beta, ev, sel, prev_pdf, prev_specular, wp.static(mis))
         return wp.static(rest)(lights, li, prev_p, p, ng, wo, beta, sel, prev_pdf, prev_specular, L)
 
     return add_emitted

@@ -80,10 +80,10 @@ def _radiance(lights: Lights, i: int, n_light: wp.vec3, w_out: wp.vec3) -> wp.ve
 @wp.func
 def emitted(lights: Lights, i: int, p_ref: wp.vec3, p: wp.vec3, n: wp.vec3, w_out: wp.vec3) -> LightEval:
     """What a ray from p_ref finds on this light at p (normal n), leaving towards w_out."""
-    e = LightEval()
-    e.L = _radiance(lights, i, n, w_out)
-    e.pdf = _pdf(lights, i, p_ref, p, n)
-    return e
+    ev = LightEval()
+    ev.L = _radiance(lights, i, n, w_out)
+    ev.pdf = _pdf(lights, i, p_ref, p, n)
+    return ev
 
 
 @wp.func

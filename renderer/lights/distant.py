@@ -67,13 +67,13 @@ def _cone_solid_angle(cos_max: float) -> float:
 def escaped(lights: Lights, i: int, p: wp.vec3, d: wp.vec3) -> LightEval:
     """A soft sun seen along d: its irradiance spread evenly over the cone (zero outside, and for
     a delta light)."""
-    e = LightEval()
+    ev = LightEval()
     cm = lights.f[i, F.cos_max]
     if cm >= 1.0 or wp.dot(d, lights.v[i, V.direction]) < cm:
-        return e
-    e.L = lights.L[i] / _cone_solid_angle(cm)
-    e.pdf = 1.0 / _cone_solid_angle(cm)
-    return e
+        return ev
+    ev.L = lights.L[i] / _cone_solid_angle(cm)
+    ev.pdf = 1.0 / _cone_solid_angle(cm)
+    return ev
 
 
 @wp.func

@@ -205,10 +205,10 @@ def pdf(lights: Lights, i: int, d: wp.vec3) -> float:
 def escaped(lights: Lights, i: int, p: wp.vec3, d: wp.vec3) -> LightEval:
     if lights.k[i, K.mapping] == MAP_PORTAL:
         return portal.escaped(lights, i, lights.k[i, K.width], p, d)
-    e = LightEval()
-    e.L = radiance(lights, i, d)
-    e.pdf = pdf(lights, i, d)
-    return e
+    ev = LightEval()
+    ev.L = radiance(lights, i, d)
+    ev.pdf = pdf(lights, i, d)
+    return ev
 
 
 @wp.func

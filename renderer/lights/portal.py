@@ -111,17 +111,17 @@ def _lookup(lights: Lights, i: int, uv: wp.vec2, n: int) -> wp.vec3:
 @wp.func
 def escaped(lights: Lights, i: int, n: int, p: wp.vec3, d: wp.vec3) -> LightEval:
     """What a ray leaving the scene from p along d sees: the map through the portal, else nothing."""
-    e = LightEval()
+    ev = LightEval()
     w = wp.normalize(lights.to_light[i] * d)
     b = _bounds(lights, i, p, n)
     if w[2] <= 0.0 or b[2] <= b[0] or b[3] <= b[1]:
-        return e
+        return ev
     uv = _uv(w)
     if uv[0] < b[0] or uv[0] > b[2] or uv[1] < b[1] or uv[1] > b[3]:
-        return e
-    e.L = _lookup(lights, i, uv, n)
-    e.pdf = 1.0 / ((b[2] - b[0]) * (b[3] - b[1]) * _dw_duv(w))
-    return e
+        return ev
+    ev.L = _lookup(lights, i, uv, n)
+    ev.pdf = 1.0 / ((b[2] - b[0]) * (b[3] - b[1]) * _dw_duv(w))
+    return ev
 
 
 @wp.func

@@ -86,14 +86,14 @@ def delta_sample(wi: wp.vec3, weight: wp.vec3, pdf: float, flags: int) -> BSDFSa
 
 
 @wp.func
-def sampled(wo: wp.vec3, wi: wp.vec3, e: BSDFEval, lobe: int) -> BSDFSample:
+def sampled(wo: wp.vec3, wi: wp.vec3, ev: BSDFEval, lobe: int) -> BSDFSample:
     """A sampled direction of a non-delta lobe finished from its ``eval_pdf``: weight f |cos θi| / pdf."""
-    if e.pdf <= 0.0:
+    if ev.pdf <= 0.0:
         return failed_sample()
     s = BSDFSample()
     s.wi = wi
-    s.pdf = e.pdf
-    s.weight = e.f * (wp.abs(wi[2]) / e.pdf)
+    s.pdf = ev.pdf
+    s.weight = ev.f * (wp.abs(wi[2]) / ev.pdf)
     s.flags = lobe | side(wo, wi)
     return s
 
@@ -119,15 +119,15 @@ def reflect_z(w: wp.vec3) -> wp.vec3:
 def refract(wi: wp.vec3, n: wp.vec3, eta: float) -> wp.vec4:
     """Refracted direction of wi (pointing away from the surface) through normal n; w = eta' or 0 under TIR."""
     cos_i = wp.dot(n, wi)
-    e = eta
+    eta_rel = eta
     nn = n
     if cos_i < 0.0:
-        e = 1.0 / e
+        eta_rel = 1.0 / eta_rel
         cos_i = -cos_i
         nn = -n
-    sin2_t = wp.max(0.0, 1.0 - cos_i * cos_i) / (e * e)
+    sin2_t = wp.max(0.0, 1.0 - cos_i * cos_i) / (eta_rel * eta_rel)
     if sin2_t >= 1.0:
         return wp.vec4(0.0)
     cos_t = wp.sqrt(1.0 - sin2_t)
-    wt = -wi / e + nn * (cos_i / e - cos_t)
-    return wp.vec4(wt[0], wt[1], wt[2], e)
+    wt = -wi / eta_rel + nn * (cos_i / eta_rel - cos_t)
+    return wp.vec4(wt[0], wt[1], wt[2], eta_rel)

@@ -116,10 +116,10 @@ def mean3(v: wp.vec3) -> float:
 @wp.func
 def glossy_reflection(wo: wp.vec3, wi: wp.vec3, wm: wp.vec3, r: wp.vec3, alpha: wp.vec2) -> BSDFEval:
     """D G R / (4 |cos θo cos θi|) and the visible-normal density of wi (no lobe choice)."""
-    e = BSDFEval()
-    e.f = r * (ggx_D(wm, alpha) * ggx_G(wo, wi, alpha) / wp.abs(4.0 * wi[2] * wo[2]))
-    e.pdf = ggx_visible_pdf(wo, wm, alpha) / (4.0 * wp.abs(wp.dot(wo, wm)))
-    return e
+    ev = BSDFEval()
+    ev.f = r * (ggx_D(wm, alpha) * ggx_G(wo, wi, alpha) / wp.abs(4.0 * wi[2] * wo[2]))
+    ev.pdf = ggx_visible_pdf(wo, wm, alpha) / (4.0 * wp.abs(wp.dot(wo, wm)))
+    return ev
 
 
 @wp.func
@@ -130,34 +130,34 @@ def coating_eval(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec
     :func:`coating_sample` with the same ``sides`` (with both, reflection or refraction is picked
     by their mean at the facet). ``radiance`` false: no 1/eta'² on refraction. A smooth coating
     has delta lobes only: no value here."""
-    e = BSDFEval()
+    ev = BSDFEval()
     h = half_vector(wo, wi, eta)      # the facet normal (xyz) and eta' (w; 0: no facet)
     if is_smooth(alpha) or h[3] == 0.0:
-        return e
+        return ev
     wm = wp.vec3(h[0], h[1], h[2])
     r, t = coating_rgb(c, wp.dot(wo, wm))
     total = mean3(r) + mean3(t)
     if total <= 0.0:
-        return e
+        return ev
     if wo[2] * wi[2] > 0.0:
         if (sides & REFLECTION) == 0 or mean3(r) <= 0.0:
-            return e
-        e = glossy_reflection(wo, wi, wm, r, alpha)
+            return ev
+        ev = glossy_reflection(wo, wi, wm, r, alpha)
         if sides == BOTH_SIDES:
-            e.pdf = e.pdf * mean3(r) / total
-        return e
+            ev.pdf = ev.pdf * mean3(r) / total
+        return ev
     if (sides & TRANSMISSION) == 0 or mean3(t) <= 0.0:
-        return e
+        return ev
     denom = wp.dot(wi, wm) + wp.dot(wo, wm) / h[3]
     denom2 = denom * denom
     g = ggx_D(wm, alpha) * ggx_G(wo, wi, alpha) * wp.abs(wp.dot(wi, wm) * wp.dot(wo, wm) / (denom2 * wi[2] * wo[2]))
     if radiance:
         g = g / (h[3] * h[3])
-    e.f = t * g
-    e.pdf = ggx_visible_pdf(wo, wm, alpha) * wp.abs(wp.dot(wi, wm)) / denom2
+    ev.f = t * g
+    ev.pdf = ggx_visible_pdf(wo, wm, alpha) * wp.abs(wp.dot(wi, wm)) / denom2
     if sides == BOTH_SIDES:
-        e.pdf = e.pdf * mean3(t) / total
-    return e
+        ev.pdf = ev.pdf * mean3(t) / total
+    return ev
 
 
 @wp.func

@@ -111,17 +111,17 @@ def conductor_eval(eta: wp.vec3, k: wp.vec3, alpha: wp.vec2, wo: wp.vec3, wi: wp
                    rows: wp.array(dtype=wp.vec4), table: int) -> BSDFEval:
     """The rough conductor lobe (two-sided) of complex relative index eta + i k (or the spectral
     Fresnel table at rows[table], table > 0)."""
-    e = BSDFEval()
+    ev = BSDFEval()
     if is_smooth(alpha) or not same_hemisphere(wo, wi):
-        return e
+        return ev
     sgn = wp.where(wo[2] < 0.0, -1.0, 1.0)
     o = signed_z(wo, sgn)
     i = signed_z(wi, sgn)
     wm = wp.normalize(o + i)
     g = ggx_D(wm, alpha) * ggx_G(o, i, alpha) / (4.0 * o[2] * i[2])
-    e.f = conductor_fresnel(wp.dot(o, wm), eta, k, rows, table) * g
-    e.pdf = ggx_visible_pdf(o, wm, alpha) / (4.0 * wp.abs(wp.dot(o, wm)))
-    return e
+    ev.f = conductor_fresnel(wp.dot(o, wm), eta, k, rows, table) * g
+    ev.pdf = ggx_visible_pdf(o, wm, alpha) / (4.0 * wp.abs(wp.dot(o, wm)))
+    return ev
 
 
 @wp.func

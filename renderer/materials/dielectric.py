@@ -87,12 +87,12 @@ def _reflects(F: float, sides: int, u: float) -> bool:
 def dielectric_eval(eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
     """The rough dielectric lobes at (wo, wi); the density is that of ``dielectric_sample`` with the
     same ``sides``. ``radiance`` false is pbrt's importance transport: no 1/eta'^2 on refraction."""
-    e = BSDFEval()
+    ev = BSDFEval()
     if eta == 1.0 or is_smooth(alpha):
-        return e
+        return ev
     h = half_vector(wo, wi, eta)
     if h[3] == 0.0:
-        return e
+        return ev
     wm = wp.vec3(h[0], h[1], h[2])
     etap = h[3]
     F = fresnel_dielectric(wp.dot(wo, wm), eta)
@@ -101,17 +101,17 @@ def dielectric_eval(eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3, sides:
     G = ggx_G(wo, wi, alpha)
     vis = ggx_visible_pdf(wo, wm, alpha)
     if wo[2] * wi[2] > 0.0:
-        e.f = wp.vec3(D * G * F / wp.abs(4.0 * wi[2] * wo[2]))
-        e.pdf = vis / (4.0 * wp.abs(wp.dot(wo, wm))) * P[0]
-        return e
+        ev.f = wp.vec3(D * G * F / wp.abs(4.0 * wi[2] * wo[2]))
+        ev.pdf = vis / (4.0 * wp.abs(wp.dot(wo, wm))) * P[0]
+        return ev
     denom = wp.dot(wi, wm) + wp.dot(wo, wm) / etap
     denom2 = denom * denom
     ft = D * (1.0 - F) * G * wp.abs(wp.dot(wi, wm) * wp.dot(wo, wm) / (denom2 * wi[2] * wo[2]))
     if radiance:
         ft = ft / (etap * etap)
-    e.f = wp.vec3(ft)
-    e.pdf = vis * wp.abs(wp.dot(wi, wm)) / denom2 * P[1]
-    return e
+    ev.f = wp.vec3(ft)
+    ev.pdf = vis * wp.abs(wp.dot(wi, wm)) / denom2 * P[1]
+    return ev
 
 
 @wp.func

@@ -18,11 +18,11 @@ SLOT = PARAMS.slots
 @wp.func
 def lambert_eval(r: wp.vec3, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
     """A two-sided Lambertian lobe of albedo r, cosine-sampled."""
-    e = BSDFEval()
+    ev = BSDFEval()
     if same_hemisphere(wo, wi):
-        e.f = r * INV_PI
-        e.pdf = wp.abs(wi[2]) * INV_PI
-    return e
+        ev.f = r * INV_PI
+        ev.pdf = wp.abs(wi[2]) * INV_PI
+    return ev
 
 
 @wp.func

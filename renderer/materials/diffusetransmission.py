@@ -43,16 +43,16 @@ def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
     r = _colour(b, SLOT.reflectance)
     t = _colour(b, SLOT.transmittance)
     pr = _reflect_probability(r, t)
-    e = BSDFEval()
+    ev = BSDFEval()
     if max3(r) + max3(t) <= 0.0 or wi[2] == 0.0 or wo[2] == 0.0:
-        return e
+        return ev
     if same_hemisphere(wo, wi):
-        e.f = r * INV_PI
-        e.pdf = pr * wp.abs(wi[2]) * INV_PI
+        ev.f = r * INV_PI
+        ev.pdf = pr * wp.abs(wi[2]) * INV_PI
     else:
-        e.f = t * INV_PI
-        e.pdf = (1.0 - pr) * wp.abs(wi[2]) * INV_PI
-    return e
+        ev.f = t * INV_PI
+        ev.pdf = (1.0 - pr) * wp.abs(wi[2]) * INV_PI
+    return ev
 
 
 @wp.func

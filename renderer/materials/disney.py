@@ -347,10 +347,10 @@ def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
     glass = BSDFEval()
     if P.gw > 0.0 and not P.thin and not P.exit:
         glass = dielectric.eval_pdf(_glass(P), wo, wi)
-    e = BSDFEval()
-    e.f = _value(P, wo, wi, P.o, i, glass)
-    e.pdf = _density(P, _probabilities(P, wo), P.o, i, glass)
-    return e
+    ev = BSDFEval()
+    ev.f = _value(P, wo, wi, P.o, i, glass)
+    ev.pdf = _density(P, _probabilities(P, wo), P.o, i, glass)
+    return ev
 
 
 @wp.func
@@ -429,6 +429,6 @@ def subsurface_lobe(b: BSDF, cos_o: float) -> SubsurfaceLobe:
 @wp.func
 def exit_bsdf(b: BSDF) -> BSDF:
     """The same material at a subsurface exit point: only the exit lobe."""
-    e = b
-    e.flags = b.flags | EXIT
-    return e
+    ev = b
+    ev.flags = b.flags | EXIT
+    return ev

@@ -123,14 +123,14 @@ def iface_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: boo
         return dielectric_eval(s.eta[0], s.alpha, wo, wi, sides, radiance)
     if s.kind == FILM:
         return coating_eval(s.coat, s.eta[0], s.alpha, wo, wi, sides, radiance)
-    e = BSDFEval()
+    ev = BSDFEval()
     if (sides & REFLECTION) == 0:
-        return e
+        return ev
     if s.kind == LAMBERT:
-        e = lambert_eval(s.albedo, wo, wi)
+        ev = lambert_eval(s.albedo, wo, wi)
     else:
-        e = conductor_eval(s.eta, s.k, s.alpha, wo, wi, s.coat.layers, s.coat.table_first)
-    return e
+        ev = conductor_eval(s.eta, s.k, s.alpha, wo, wi, s.coat.layers, s.coat.table_first)
+    return ev
 
 
 @wp.func
@@ -416,7 +416,7 @@ def layered_sample(L: Slab, wo_in: wp.vec3, u: wp.vec3) -> BSDFSample:
 @wp.func
 def layered_eval_pdf(L: Slab, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
     """f and pdf together, as a material's ``eval_pdf`` (two independent estimates)."""
-    e = BSDFEval()
-    e.f = layered_f(L, wo, wi)
-    e.pdf = layered_pdf(L, wo, wi)
-    return e
+    ev = BSDFEval()
+    ev.f = layered_f(L, wo, wi)
+    ev.pdf = layered_pdf(L, wo, wi)
+    return ev

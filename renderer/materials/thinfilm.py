@@ -201,18 +201,18 @@ def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
     alpha = _alpha(b)
     if not is_smooth(alpha):
         return _rough_eval_pdf(b, wo, wi, alpha)
-    e = BSDFEval()
+    ev = BSDFEval()
     if _transmissive(b) or max3(b.p[SLOT.reflectance]) <= 0.0 or not same_hemisphere(wo, wi):
-        return e
+        return ev
     r_o, t_o = film_reflect_transmit(b, wo)
     r_i, t_i = film_reflect_transmit(b, wi)
     base = _base_lobe(b, r_o)
-    e.f = wp.cw_mul(base, wp.vec3(1.0) - r_i) * INV_PI
+    ev.f = wp.cw_mul(base, wp.vec3(1.0) - r_i) * INV_PI
     p_base = mean3(base)
     total = mean3(r_o) + mean3(t_o) + p_base
     if total > 0.0:
-        e.pdf = p_base / total * wp.abs(wi[2]) * INV_PI
-    return e
+        ev.pdf = p_base / total * wp.abs(wi[2]) * INV_PI
+    return ev
 
 
 @wp.func
@@ -286,9 +286,9 @@ def _rough_opaque_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3, alpha: wp.vec2) ->
     """A rough coated opaque substrate (two-sided): the glossy coating lobe plus the smooth case's
     substrate lobe, which keeps the film's R and T at the macroscopic normal (an approximation:
     the coating's glossy albedo and 1 − R there need not sum to exactly 1)."""
-    e = BSDFEval()
+    ev = BSDFEval()
     if not same_hemisphere(wo, wi):
-        return e
+        return ev
     sgn = wp.where(wo[2] < 0.0, -1.0, 1.0)
     o = signed_z(wo, sgn)
     i = signed_z(wi, sgn)
@@ -297,21 +297,21 @@ def _rough_opaque_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3, alpha: wp.vec2) ->
     p_spec = _specular_share(b, r_o, base)
     wm = wp.normalize(o + i)
     r_m, t_m = coating_RT(b, wp.dot(o, wm))
-    e = glossy_reflection(o, i, wm, r_m, alpha)
-    e.pdf = e.pdf * p_spec
+    ev = glossy_reflection(o, i, wm, r_m, alpha)
+    ev.pdf = ev.pdf * p_spec
     if max3(b.p[SLOT.reflectance]) > 0.0:
         r_i, t_i = coating_RT(b, i[2])
-        e.f = e.f + wp.cw_mul(base, wp.vec3(1.0) - r_i) * INV_PI
-        e.pdf = e.pdf + (1.0 - p_spec) * i[2] * INV_PI
-    return e
+        ev.f = ev.f + wp.cw_mul(base, wp.vec3(1.0) - r_i) * INV_PI
+        ev.pdf = ev.pdf + (1.0 - p_spec) * i[2] * INV_PI
+    return ev
 
 
 @wp.func
 def _rough_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3, alpha: wp.vec2) -> BSDFEval:
     if _transmissive(b):
-        e = coating_eval(film_coating(b), _eta(b), alpha, wo, wi, BOTH_SIDES, True)
-        e.f = _tinted(b, e.f, wo, wi)
-        return e
+        ev = coating_eval(film_coating(b), _eta(b), alpha, wo, wi, BOTH_SIDES, True)
+        ev.f = _tinted(b, ev.f, wo, wi)
+        return ev
     return _rough_opaque_eval_pdf(b, wo, wi, alpha)
 
 
