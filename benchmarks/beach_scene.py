@@ -5,7 +5,6 @@ Needs the beach's assets (``assets-gen recipe scenes/beach.pbrt``) for the sun.
 """
 from __future__ import annotations
 
-import json
 import os
 import tempfile
 from pathlib import Path
@@ -17,6 +16,7 @@ import warp as wp
 ROOT = Path(__file__).resolve().parents[1]
 os.environ.setdefault("WARP_CACHE_PATH", str(ROOT / ".warp-cache"))
 
+from assets_gen.recipe import load as recipe_entries  # noqa: E402
 from renderer.scene import load_description  # noqa: E402
 from renderer.scene.description import SceneDescription  # noqa: E402
 
@@ -47,9 +47,9 @@ def sun_direction() -> np.ndarray:
 
 
 def recipe_params(entry: str) -> dict:
-    """The ``params`` of one entry of scenes/beach.recipe.json (as written: the final level)."""
-    recipe = json.loads((SCENES / "beach.recipe.json").read_text())
-    return next(a["params"] for a in recipe["assets"] if a["name"] == entry)
+    """The ``params`` of one entry of scenes/beach.recipe.json, validated by the recipe loader (as
+    written: the final level)."""
+    return next(e.params for e in recipe_entries(SCENES / "beach.recipe.json") if e.name == entry)
 
 
 @wp.kernel

@@ -27,53 +27,41 @@ def lens_material() -> MaterialDesc:
     return next(m for m in load_fragment(SCENES / "parts" / "beach_props.pbrt").materials if m.name == "lens")
 
 
-def luminous_transmittance(lens: MaterialDesc, tint: float) -> float:
+def luminous_transmittance(lens: MaterialDesc, tint: float, coated_back: bool = True) -> float:
     """D65 luminous transmittance at normal incidence of the lens: its coating (with the layers'
-    Cauchy dispersion, not the thickness map) on both faces, no interreflection, and one pass of a
-    grey tint."""
+    Cauchy dispersion, not the thickness map) on the front and, as the scene has it, on the back
+    (else a bare glass back face), no interreflection, and one pass of a grey tint."""
     import colour
 
     v = lens.values
     lam = np.arange(380.0, 781.0, 5.0)
-    eta = [1.0, *v["layer_eta"], float(np.ravel(v["eta_inner"])[0])]
-    t = multilayer_transmittance(np.ones_like(lam), lam, eta, [0.0] * len(eta), v["layer_thickness"],
-                                 v.get("layer_cauchyb"))
+    n_lens = float(np.ravel(v["eta_inner"])[0])
+    eta = [1.0, *v["layer_eta"], n_lens]
+    front = multilayer_transmittance(np.ones_like(lam), lam, eta, [0.0] * len(eta), v["layer_thickness"],
+                                     v.get("layer_cauchyb"))
+    back = front if coated_back else multilayer_transmittance(np.ones_like(lam), lam, [1.0, n_lens], [0.0, 0.0], [])
     shape = colour.SpectralShape(380, 780, 5)
     y = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape).values[:, 1]
     d65 = colour.SDS_ILLUMINANTS["D65"].copy().align(shape).values
-    return float((y * d65 * t * t * tint).sum() / (y * d65).sum())
+    return float((y * d65 * front * back * tint).sum() / (y * d65).sum())
 
 
-def mirror_directions(lens: trimesh.Trimesh, m: np.ndarray, eye: np.ndarray) -> tuple[np.ndarray, ...]:
-    """World positions of the lens front's vertices, their reflected view directions, and their
-    height in the lens (0 at the bottom, 1 at the top)."""
-    front = lens.vertex_normals[:, 2] > 0.5          # the convex front faces +z in the mesh frame
-    p = lens.vertices[front] @ m[:3, :3].T + m[:3, 3]
-    n = lens.vertex_normals[front] @ m[:3, :3].T
-    n /= np.linalg.norm(n, axis=1)[:, None]
-    d = p - eye
-    d /= np.linalg.norm(d, axis=1)[:, None]
-    r = d - 2.0 * (d * n).sum(1)[:, None] * n
-    return p, r, (p[:, 1] - p[:, 1].min()) / np.ptp(p[:, 1])
-
-
-def frame_behind(lens: trimesh.Trimesh, frame: trimesh.Trimesh, m: np.ndarray, eye: np.ndarray) -> np.ndarray:
-    """Per vertex of the lens front: whether the camera's line of sight through it, continued
-    straight past the 2 mm lens (its refraction shifts it by under 1 mm), meets the frame (a temple
-    or the rim behind): where the frame can show through the lens."""
+def lens_front(lens: trimesh.Trimesh, m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """World positions and unit normals of the lens front's vertices (the convex front faces +z in
+    the mesh frame), and each vertex's area weight: a third of the area of each face around it."""
     front = lens.vertex_normals[:, 2] > 0.5
-    p = lens.vertices[front] @ m[:3, :3].T + m[:3, 3]
-    d = (p - eye) / np.linalg.norm(p - eye, axis=1)[:, None]
-    world = trimesh.Trimesh(frame.vertices @ m[:3, :3].T + m[:3, 3], frame.faces, process=False)
-    return blocked(world, p + 0.004 * d, d)
-
-
-def vertex_areas(lens: trimesh.Trimesh) -> np.ndarray:
-    """A third of the area of each face around each vertex of the lens front (the weights that
-    turn vertex counts into area fractions)."""
+    n = lens.vertex_normals[front] @ m[:3, :3].T
     w = np.zeros(len(lens.vertices))
     np.add.at(w, lens.faces.ravel(), np.repeat(lens.area_faces / 3.0, 3))
-    return w[lens.vertex_normals[:, 2] > 0.5]
+    return lens.vertices[front] @ m[:3, :3].T + m[:3, 3], n / np.linalg.norm(n, axis=1)[:, None], w[front]
+
+
+def frame_behind(p: np.ndarray, d: np.ndarray, frame: trimesh.Trimesh, m: np.ndarray) -> np.ndarray:
+    """Whether the camera's line of sight d through each lens-front point p, continued straight past
+    the 2 mm lens (its refraction shifts it by under 1 mm), meets the frame (a temple or the rim
+    behind): where the frame can show through the lens."""
+    world = trimesh.Trimesh(frame.vertices @ m[:3, :3].T + m[:3, 3], frame.faces, process=False)
+    return blocked(world, p + 0.004 * d, d)
 
 
 def main() -> None:
@@ -83,28 +71,32 @@ def main() -> None:
                     help="other grey tints per pass to compare (the category 3 lens before 2026-12-02: 0.21)")
     args = ap.parse_args()
     m, eye, lens_mat = np.load(args.placement)["transform"], camera_eye(), lens_material()
-    for tint in [float(lens_mat.values["tint"][1]), *args.tint]:   # the scene's: the green of its "rgb tint"
-        print(f"tint {tint} per pass: luminous transmittance {luminous_transmittance(lens_mat, tint):.2f}")
+    tint = float(lens_mat.values["tint"][1])   # the scene's: the green of its "rgb tint"
+    print(f"tint {tint} per pass: luminous transmittance {luminous_transmittance(lens_mat, tint):.2f}, "
+          f"{luminous_transmittance(lens_mat, tint, coated_back=False):.2f} with a bare back face")
+    for other in args.tint:
+        print(f"tint {other} per pass: luminous transmittance {luminous_transmittance(lens_mat, other):.2f}")
     tilt = np.degrees(np.arcsin(m[1, 2] / np.linalg.norm(m[:3, 2])))
     print(f"lens axis (mesh +z) {tilt:.1f} deg above the horizontal")
     frame = trimesh.load(ASSETS / "sunglasses" / "frame.ply", process=False)
     for name in ("lens_left", "lens_right"):
-        lens = trimesh.load(ASSETS / "sunglasses" / f"{name}.ply", process=False)
-        p, r, height = mirror_directions(lens, m, eye)
+        p, n, w = lens_front(trimesh.load(ASSETS / "sunglasses" / f"{name}.ply", process=False), m)
+        d = (p - eye) / np.linalg.norm(p - eye, axis=1)[:, None]
+        r = d - 2.0 * (d * n).sum(1)[:, None] * n                   # the mirror direction
+        height = (p[:, 1] - p[:, 1].min()) / np.ptp(p[:, 1])        # 0 at the lens's bottom, 1 at its top
+        bands = [(lo, (height >= lo) & (height < lo + 0.2 + 1e-9)) for lo in np.arange(0.0, 1.0, 0.2)]
         elevation = np.degrees(np.arcsin(np.clip(r[:, 1], -1, 1)))
         azimuth = np.degrees(np.arctan2(r[:, 2], r[:, 0]))
         view = np.degrees(np.arctan2(eye[1] - p[:, 1].mean(), np.linalg.norm((eye - p.mean(0))[[0, 2]])))
         print(f"{name}: centre {np.round(p.mean(0), 3)}, camera {view:.1f} deg above it")
         print("  lens height   elevation (deg)   azimuth (deg)")
-        for lo in np.arange(0.0, 1.0, 0.2):
-            s = (height >= lo) & (height < lo + 0.2 + 1e-9)
+        for lo, s in bands:
             print(f"  {lo:.1f}-{lo + 0.2:.1f}      {elevation[s].min():6.0f} .. {elevation[s].max():3.0f}"
                   f"     {azimuth[s].min():5.0f} .. {azimuth[s].max():4.0f}")
-        behind, w = frame_behind(lens, frame, m, eye), vertex_areas(lens)
-        print(f"  the frame lies behind {w[behind].sum() / w.sum():.1%} of the lens front's area"
-              + "".join(f"; {(w * behind)[s].sum() / w[s].sum():.0%} of heights {lo:.1f}-{lo + 0.2:.1f}"
-                        for lo in np.arange(0.0, 1.0, 0.2)
-                        if (w * behind)[(s := (height >= lo) & (height < lo + 0.2 + 1e-9))].sum() > 0))
+        covered = w * frame_behind(p, d, frame, m)
+        print(f"  the frame lies behind {covered.sum() / w.sum():.1%} of the lens front's area"
+              + "".join(f"; {covered[s].sum() / w[s].sum():.0%} of heights {lo:.1f}-{lo + 0.2:.1f}"
+                        for lo, s in bands if covered[s].sum() > 0))
         up = elevation > 0
         for dist in (7.0, 14.0):
             t = dist / np.maximum(np.hypot(r[up, 0], r[up, 2]), 1e-9)

@@ -16,7 +16,7 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     one worker (its kernels compile once, not on every worker that draws one of its tests), and the
     tests that start a local Ray instance share one worker, so two instances never start at once."""
     for item in items:
-        if not any(True for _ in item.iter_markers("xdist_group")):
+        if item.get_closest_marker("xdist_group") is None:
             path = Path(str(item.fspath)).relative_to(ROOT)
             group = "ray" if path.parts[:2] == ("tests", "cluster") else path.as_posix()
             item.add_marker(pytest.mark.xdist_group(group))
