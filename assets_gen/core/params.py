@@ -24,6 +24,8 @@ def reading(path: str | Path, what: str) -> Iterator[None]:
         yield
     except GeneratorError:
         raise
+    except KeyError as e:   # a parsed file without an entry the reader needs (json's bare 'key' says little)
+        raise GeneratorError(f"cannot read {what} {str(path)!r}: it has no {e.args[0]!r} entry") from e
     except Exception as e:  # the block holds only the read, so nothing else is masked
         raise GeneratorError(f"cannot read {what} {str(path)!r}: {e}") from e
 

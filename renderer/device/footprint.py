@@ -58,9 +58,23 @@ def image_size(path: Path) -> tuple[int, int]:
         return 0, 0
 
 
-def _texels(path: Path) -> int:
-    w, h = image_size(path)
-    return w * h
+def _images(desc: SceneDescription) -> list[tuple[str, Path, int, int, object]]:
+    """(what, path, width, height, scene location) of every image texture and environment map."""
+    found = []
+    for t in desc.textures.values():
+        name = t.params.params.get("filename")
+        if t.kind == "imagemap" and name is not None and name.values:
+            path = t.base_dir / str(name.values[0])
+            found.append(("texture image", path, *image_size(path), t.loc))
+    for light in desc.lights:
+        fname = light.values.get("filename") if light.kind == "infinite" else None
+        if fname:
+            found.append(("environment image", Path(fname), *image_size(Path(fname)), light.loc))
+    return found
+
+
+def _image_bytes(what: str, width: int, height: int) -> int:
+    return width * height * (_TEXEL if what == "texture image" else _ENV_TEXEL)
 
 
 def estimate(desc: SceneDescription, width: int, height: int) -> int:
@@ -69,23 +83,24 @@ def estimate(desc: SceneDescription, width: int, height: int) -> int:
     for m in desc.meshes:
         total += 2 * len(m.positions) * _VERTEX + len(m.indices) * (2 * _TRIANGLE + _BVH_PER_TRIANGLE)
     total += sum(len(s.transforms) * len(s.shapes) for s in desc.instance_sets) * _INSTANCE
-    for t in desc.textures.values():
-        name = t.params.params.get("filename")
-        if t.kind == "imagemap" and name is not None and name.values:
-            total += _texels(t.base_dir / str(name.values[0])) * _TEXEL
-    for light in desc.lights:
-        fname = light.values.get("filename") if light.kind == "infinite" else None
-        if fname:
-            total += _texels(Path(fname)) * _ENV_TEXEL
+    total += sum(_image_bytes(what, w, h) for what, _, w, h, _ in _images(desc))
     return total
 
 
 def check_fits(desc: SceneDescription, width: int, height: int, limit_bytes: int | None = None) -> int:
-    """The estimate, or RenderError if it exceeds ``limit_bytes`` (default: this machine's memory)."""
+    """The estimate, or RenderError if it exceeds ``limit_bytes`` (default: this machine's memory).
+    When one image takes most of it, the message names that file: it is what the user must change."""
     need = estimate(desc, width, height)
     limit = machine_memory() if limit_bytes is None else limit_bytes
     if need > limit:
-        raise RenderError(f"{desc.path or 'the scene'}: rendering needs about {need / 2**30:.1f} GiB, more than the "
-                          f"{limit / 2**30:.1f} GiB limit (this machine's memory unless --memory-limit says "
+        biggest = max(_images(desc), key=lambda i: _image_bytes(i[0], i[2], i[3]), default=None)
+        culprit, where = "", desc.path or "the scene"
+        if biggest is not None and 2 * _image_bytes(biggest[0], biggest[2], biggest[3]) > need:
+            what, path, w, h, loc = biggest
+            where = loc or where
+            culprit = (f" (the {what} {path}, {w}x{h} pixels by its header, about "
+                       f"{_image_bytes(what, w, h) / 2**30:.1f} GiB of it)")
+        raise RenderError(f"{where}: rendering needs about {need / 2**30:.1f} GiB{culprit}, more "
+                          f"than the {limit / 2**30:.1f} GiB limit (this machine's memory unless --memory-limit says "
                           "otherwise); lower the resolution, texture sizes or instance counts, or raise the limit")
     return need

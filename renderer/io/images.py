@@ -73,8 +73,8 @@ def read_image(path: str | Path, *, srgb: bool | None = None) -> np.ndarray:
         raise FileNotFoundError(f"image not found: {path}")
     try:
         return _decoded(path, srgb)
-    except MemoryError:
-        raise
+    except MemoryError as e:   # a valid (or lying) header asking for more than the machine has
+        raise OSError(f"cannot read image {path}: not enough memory to decode it") from e
     except Exception as e:  # each decoder has its own exception types; all mean "not a readable image"
         raise OSError(f"cannot read image {path}: {e or type(e).__name__}") from e
 

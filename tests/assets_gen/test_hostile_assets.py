@@ -68,7 +68,7 @@ def test_an_output_folder_that_is_a_file_is_refused(tmp_path, capsys):
 @pytest.mark.parametrize("params, needle", [
     ({}, "not found"),                                              # no sky.json at all
     ({"sky.json": b"{not json"}, "cannot read sky description"),
-    ({"sky.json": json.dumps({"params": {"elevation_deg": 30}}).encode()}, "cannot read sky description"),
+    ({"sky.json": json.dumps({"params": {"elevation_deg": 30}}).encode()}, "it has no 'sun' entry"),
 ])
 def test_a_corrupt_or_incomplete_sky_description_is_named(tmp_path, capsys, params, needle):
     sky = tmp_path / "sky"
@@ -78,6 +78,7 @@ def test_a_corrupt_or_incomplete_sky_description_is_named(tmp_path, capsys, para
     (sky / "sky_latlong.exr").write_bytes(b"")
     rc, line = run(["sky-lights", "--sky", str(sky), "--out", str(tmp_path / "out")], capsys)
     assert rc == EXIT_BAD_INPUT and needle in line
+    assert str(sky / "sky.json") in line               # the description is what is wrong, not the map
     assert not (tmp_path / "out").exists()
 
 

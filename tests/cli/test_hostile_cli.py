@@ -3,6 +3,7 @@ naming the bad option or file, before any rendering, and writes nothing."""
 from __future__ import annotations
 
 import io
+import struct
 import subprocess
 import sys
 import zlib
@@ -203,3 +204,18 @@ def test_a_scene_too_big_for_the_memory_limit_is_refused_before_upload(tmp_path,
 def test_memory_limit_must_be_a_positive_number(tmp_path, capsys, value):
     refused(capsys, [str(scene(tmp_path)), "-o", str(tmp_path / "o.exr"), "--memory-limit", value],
             "memory limit must be a positive number of GiB")
+
+
+def _exr_claiming(path: Path, width: int, height: int) -> None:
+    """A valid 4x4 EXR whose dataWindow is then rewritten to claim ``width`` x ``height`` pixels."""
+    write_exr(path, np.zeros((4, 4, 3), np.float32))
+    data = path.read_bytes()
+    at = data.index(b"dataWindow\x00box2i\x00") + len(b"dataWindow\x00box2i\x00") + 4   # after the size field
+    path.write_bytes(data[:at] + struct.pack("<4i", 0, 0, width - 1, height - 1) + data[at + 16:])
+
+
+def test_an_environment_map_too_big_for_memory_is_named_with_its_line(tmp_path, capsys):
+    _exr_claiming(tmp_path / "env.exr", 80_000, 40_000)
+    p = scene(tmp_path, light='LightSource "infinite" "string filename" "env.exr"')
+    line = refused(capsys, [str(p), "-o", str(tmp_path / "o.exr"), "--quiet"], "GiB limit")
+    assert f"{p}:4:" in line and "env.exr" in line and "80000x40000" in line
