@@ -30,11 +30,19 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "run", None):
         parser.print_help()
         return 0 if args.command is None else 2
+    from renderer.errors import RenderError
+
     try:
         for path in args.run(args):
             print(path)
-    except GeneratorError as e:
+    # RenderError: the renderer's parser, ray caster or image reader on a scene or file we were
+    # given (it names the file and line); OSError and MemoryError: the machine (a full disk, too
+    # little memory), not the command. Each is one line, never a traceback.
+    except (GeneratorError, RenderError, OSError) as e:
         print(f"assets-gen {args.command}: error: {e}", file=sys.stderr)
+        return 2
+    except MemoryError:
+        print(f"assets-gen {args.command}: error: not enough memory for these parameters", file=sys.stderr)
         return 2
     return 0
 

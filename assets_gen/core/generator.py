@@ -54,7 +54,7 @@ class Generator:
         """Validate ``params`` (default: all defaults), write the files for ``seed`` plus the manifest
         ``<name>.json`` into ``out_dir`` (default ``assets/<name>``) and return their paths.
         Relative input paths resolve against ``base`` (default: the working folder). Nothing is
-        left behind on failure: an output folder this call created is removed again."""
+        left behind on failure: the output folder is made only when the files move in."""
         given = self.params() if params is None else params
         if not isinstance(given, self.params):
             raise TypeError(f"{self.name} takes {self.params.__name__}, not {type(given).__name__}")
@@ -63,15 +63,9 @@ class Generator:
         resolved = given.resolved(Path(base)) if base is not None else given
         resolved.validate()
         out_dir = Path(out_dir) if out_dir is not None else Path("assets") / self.name
-        created = not out_dir.exists()
-        try:
-            with staged_output(out_dir) as stage:
-                job = Job(resolved, given, seed, stage, out_dir, preview and self.previews)
-                names = self.write(job)
-                manifest = f"{self.name}.json"
-                write_manifest(stage / manifest, self.name, {**given.as_dict(), **job.notes}, seed, names)
-        except BaseException:
-            if created and out_dir.is_dir() and not any(out_dir.iterdir()):
-                out_dir.rmdir()
-            raise
+        with staged_output(out_dir) as stage:
+            job = Job(resolved, given, seed, stage, out_dir, preview and self.previews)
+            names = self.write(job)
+            manifest = f"{self.name}.json"
+            write_manifest(stage / manifest, self.name, {**given.as_dict(), **job.notes}, seed, names)
         return [str(out_dir / n) for n in [*names, manifest]]

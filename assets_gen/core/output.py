@@ -3,6 +3,7 @@ manifest, binary PLY meshes and scalar maps (EXR with a greyscale PNG preview)."
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import math
 import shutil
@@ -19,15 +20,25 @@ from assets_gen.core.params import GeneratorError
 @contextlib.contextmanager
 def staged_output(out_dir: str | Path) -> Iterator[Path]:
     """Yield an empty staging folder; its files move into ``out_dir`` only if the body succeeds,
-    so a failed or interrupted generator leaves nothing half-written behind."""
+    so a failed or interrupted generator leaves nothing behind: not a half-written file, and not
+    the output folder or its parents either, which are made only then. The stage sits in the
+    nearest existing ancestor of ``out_dir`` (the same file system, so the moves are renames)."""
     out_dir = Path(out_dir)
+    anchor = out_dir.absolute()
+    while not anchor.exists() and anchor != anchor.parent:
+        anchor = anchor.parent
     try:
-        out_dir.mkdir(parents=True, exist_ok=True)
-        stage = Path(tempfile.mkdtemp(prefix=".staging-", dir=out_dir))
+        if not anchor.is_dir():
+            raise NotADirectoryError(errno.ENOTDIR, f"{anchor} is not a folder")
+        stage = Path(tempfile.mkdtemp(prefix=".staging-", dir=anchor))
     except OSError as e:
         raise GeneratorError(f"cannot write into output folder {str(out_dir)!r}: {e.strerror or e}") from e
     try:
         yield stage
+        try:
+            out_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise GeneratorError(f"cannot write into output folder {str(out_dir)!r}: {e.strerror or e}") from e
         for f in sorted(stage.iterdir()):
             f.replace(out_dir / f.name)
     finally:

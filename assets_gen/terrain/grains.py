@@ -130,7 +130,8 @@ def ground_height(vertices: np.ndarray, faces: np.ndarray, xz: np.ndarray) -> np
 def scene_camera(p: GrainParams, vertices: np.ndarray, faces: np.ndarray) -> PinholeCamera:
     """The scene file's camera, or one from the parameters with heights taken above the sand."""
     if p.scene:
-        return PinholeCamera.from_scene(p.scene)
+        with reading(p.scene, "scene"):     # the renderer's own located error, as one line of ours
+            return PinholeCamera.from_scene(p.scene)
     pos, target = np.array(p.camera_position), np.array(p.camera_look_at)
     ground = ground_height(vertices, faces, np.array([[pos[0], pos[2]], [target[0], target[2]]]))
     pos[1] += ground[0]

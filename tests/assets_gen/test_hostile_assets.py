@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from assets_gen import cli
@@ -54,6 +55,50 @@ def test_garbage_input_files_are_named(tmp_path, capsys, argv, what):
     rc, line = run([*argv, str(junk), "--out", str(tmp_path / "out")], capsys)
     assert rc == EXIT_BAD_INPUT
     assert f"cannot read {what} '{junk}'" in line
+    assert not (tmp_path / "out").exists()
+
+
+def _all_black_png(path) -> None:
+    from PIL import Image
+
+    Image.fromarray(np.zeros((16, 16), np.uint8)).save(path, format="PNG")
+
+
+def _flat_exr(path) -> None:
+    from renderer.io.images import write_exr
+
+    write_exr(path, np.zeros((8, 8, 1), np.float32))      # a valid EXR, but not a dunes heightfield
+
+
+@pytest.mark.parametrize("argv, make, needle", [
+    (["ripples", "--dunes"], lambda p: p.write_bytes(b""), "cannot read heightfield"),
+    (["ripples", "--dunes"], _flat_exr, "is not a dunes heightfield"),
+    (["grains", "--surface"], lambda p: p.write_bytes(b""), "cannot read surface mesh"),
+    (["lens-thickness", "--mask"], lambda p: p.write_bytes(b""), "cannot read lens mask"),
+    (["lens-thickness", "--mask"], _all_black_png, "lens mask is empty"),
+])
+def test_a_refused_input_leaves_no_output_folder_nor_its_parents(tmp_path, capsys, argv, make, needle):
+    given = tmp_path / "input"
+    make(given)
+    rc, line = run([*argv, str(given), "--out", str(tmp_path / "made" / "for" / "out")], capsys)
+    assert rc == EXIT_BAD_INPUT and needle in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["input"]      # no folder, no staging left
+
+
+@pytest.mark.parametrize("text, needle", [
+    ('WorldBegin\nShape "sphere" "float radius" [ 1\n', 'unterminated "["'),
+    ('Camera "nope"\nWorldBegin\n', 'unknown Camera "nope"'),
+    ('WorldBegin\nShape "plymesh" "string filename" "missing.ply"\n', "PLY mesh not found"),
+])
+def test_grains_with_a_scene_that_fails_to_load_is_one_located_line(tmp_path, capsys, text, needle):
+    import trimesh
+
+    trimesh.creation.box().export(tmp_path / "box.ply")
+    (tmp_path / "s.pbrt").write_text(text)
+    rc, line = run(["grains", "--surface", str(tmp_path / "box.ply"), "--scene", str(tmp_path / "s.pbrt"),
+                    "--count", "10", "--out", str(tmp_path / "out")], capsys)
+    assert rc == EXIT_BAD_INPUT
+    assert line.startswith("assets-gen grains: error: ") and f"{tmp_path / 's.pbrt'}:" in line and needle in line
     assert not (tmp_path / "out").exists()
 
 
