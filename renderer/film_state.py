@@ -7,7 +7,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from renderer.device.film import fixed_from_float
+from renderer.device.film import MAX_SAMPLE, ONE, fixed_from_float
 from renderer.errors import RenderError
 from renderer.sample_ranges import Ranges, count, from_array, to_array
 from renderer.settings import RenderSettings
@@ -49,11 +49,15 @@ class FilmState:
                               "refusing to resume")
         sums = state["sum"]
         if sums.dtype.kind == "f" and sums.shape == (pixels, 3):
-            sums = fixed_from_float(sums)
+            try:
+                sums = fixed_from_float(sums)
+            except ValueError as e:
+                raise RenderError(f"{source}: {e}; refusing to resume") from None
         if sums.shape != (pixels, 3, 2) or sums.dtype.kind not in "iu":
             raise RenderError(f"{source} holds film sums of shape {sums.shape}, not ({pixels}, 3, 2) integers; "
                               "refusing to resume")
         spp = int(state["spp"])
+        _check_contents(sums, spp, int(np.sum(state["bad"])), float(np.sum(state["rays"])), pixels, source)
         try:
             ranges = from_array(state["ranges"]) if "ranges" in state else ([(0, spp)] if spp else [])
         except ValueError as e:
@@ -62,3 +66,21 @@ class FilmState:
             raise RenderError(f"{source} holds {spp} spp but sample ranges of {count(ranges)}; refusing to resume")
         return cls(sums.astype(np.int64), ranges, int(np.sum(state["bad"])), float(np.sum(state["rays"])),
                    float(state["seconds"]))
+
+
+def _check_contents(sums: np.ndarray, spp: int, bad: int, rays: float, pixels: int, source: str) -> None:
+    """Refuse sums and counts no render of ``spp`` samples per pixel could hold: a whole part below 0
+    or above spp x MAX_SAMPLE (NaN written into int64 becomes -2^63), a fraction outside [0, 1),
+    more dropped samples than samples, a negative ray count."""
+    whole, fraction = sums[..., 0], sums[..., 1]
+    most = min(spp * int(MAX_SAMPLE), (1 << 63) - 1)
+    if sums.size and (whole.min() < 0 or whole.max() > most):
+        raise RenderError(f"{source} holds film sums outside [0, {spp} spp x {MAX_SAMPLE:.3g}] "
+                          f"(from {int(whole.min())} to {int(whole.max())}); refusing to resume")
+    if sums.size and (fraction.min() < 0 or fraction.max() >= ONE):
+        raise RenderError(f"{source} holds film sum fractions outside [0, 2^62); refusing to resume")
+    if not 0 <= bad <= pixels * spp:
+        raise RenderError(f"{source} counts {bad} dropped samples, not within 0..{pixels * spp} "
+                          f"({pixels} pixels x {spp} spp); refusing to resume")
+    if not rays >= 0:
+        raise RenderError(f"{source} counts {rays} rays; refusing to resume")

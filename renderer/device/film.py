@@ -65,7 +65,13 @@ def add_into(whole: np.ndarray, fraction: np.ndarray, part_whole: np.ndarray, pa
 
 
 def fixed_from_float(s: np.ndarray) -> np.ndarray:
-    """Float sums ((N, 3), a checkpoint of an earlier version) as fixed-point sums."""
+    """Float sums ((N, 3), a checkpoint of an earlier version) as fixed-point sums. Sums outside
+    [0, 2^63) are refused (ValueError), not saturated: no render makes them (samples are never
+    negative, and 2^63 is 2^23 samples at MAX_SAMPLE), int64 cannot hold them (the cast would wrap
+    to a negative sum), and a clipped sum would be a wrong image that looks right."""
+    s = np.asarray(s, dtype=np.float64)
+    if not np.all((s >= 0.0) & (s < 2.0 ** 63)):       # NaN fails both comparisons
+        raise ValueError("float film sums must lie in [0, 2^63); these cannot come from a render")
     whole = np.floor(s)
     return np.stack([whole.astype(np.int64), ((s - whole) * float(ONE)).astype(np.int64)], axis=-1)
 

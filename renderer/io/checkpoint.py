@@ -2,6 +2,7 @@
 and read back for ``--resume``. What the state holds is the session's business."""
 from __future__ import annotations
 
+import hashlib
 import zipfile
 from pathlib import Path
 
@@ -11,11 +12,28 @@ from renderer.errors import MissingFileError, RenderError
 from renderer.io.images import atomic_path
 
 
+#: The entry holding a SHA-256 of all the others, written with every checkpoint, so a file whose
+#: bytes changed after it was written (a bad disk, a hand edit) is refused instead of resumed.
+#: Checkpoints written before it existed have none and are checked by their contents alone.
+DIGEST = "sha256"
+
+
+def content_digest(state: dict[str, np.ndarray]) -> str:
+    """SHA-256 over every entry but the digest itself: names, dtypes, shapes and bytes, in name order."""
+    h = hashlib.sha256()
+    for key in sorted(k for k in state if k != DIGEST):
+        a = np.ascontiguousarray(state[key])
+        h.update(f"{key}\0{a.dtype.str}\0{a.shape}\0".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
 def save_checkpoint(path: str | Path, state: dict[str, np.ndarray]) -> None:
-    """Write ``state`` atomically: a crash mid-write keeps the previous checkpoint."""
+    """Write ``state`` and its digest atomically: a crash mid-write keeps the previous checkpoint."""
+    state = {k: np.asarray(v) for k, v in state.items() if k != DIGEST}
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as f:
-            np.savez(f, **state)
+            np.savez(f, **state, **{DIGEST: np.str_(content_digest(state))})
 
 
 #: What every checkpoint holds, by kind: "text" (a string), "count" (an integer >= 0), "seconds"
@@ -38,6 +56,9 @@ def load_checkpoint(path: str | Path) -> dict[str, np.ndarray]:
             state = {k: z[k] for k in z.files}
     except (OSError, ValueError, EOFError, zipfile.BadZipFile) as e:
         raise RenderError(f"cannot read checkpoint {path}: {e}") from e
+    if DIGEST in state and (_problem(state[DIGEST], "text") or str(state[DIGEST]) != content_digest(state)):
+        raise RenderError(f"checkpoint {path}: its contents do not match the SHA-256 written with them "
+                          "(the file was changed or damaged after it was written); refusing to resume")
     for key, kind in SCHEMA.items():
         problem = _problem(state.get(key), kind)
         if problem:
