@@ -20,7 +20,7 @@ RES ?=
 FLAGS ?=
 LEVEL ?=
 
-.PHONY: render test fuzz install bench clean props demo figures
+.PHONY: render test fuzz install bench clean props demo figures gpu-check
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -61,6 +61,12 @@ test: install
 # the hostile-input fuzzer at length (make test runs 60 seeded cases per kind); FUZZ_SEED picks another sequence
 fuzz: install
 	FUZZ_EXAMPLES=$(or $(FUZZ_EXAMPLES),5000) FUZZ_RENDER=1 $(BIN)/python -m pytest -q tests/fuzz
+
+# on a machine with an NVIDIA GPU: the tests that render, every scene on CPU and GPU, Mitsuba's
+# cuda_ad_rgb side by side and the beach's final frame, in out/gpu-check/report.md (no GPU: exits 2)
+gpu-check: install
+	$(BIN)/pip install -e '.[bench]' >/dev/null
+	$(BIN)/python benchmarks/gpu_check.py
 
 bench: install
 	$(BIN)/pip install -e '.[bench]' >/dev/null

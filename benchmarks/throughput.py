@@ -78,7 +78,7 @@ def run_ours(res: int, spp: int, device: str, all_materials: bool) -> dict:
             "load_s": first.compile_seconds}
 
 
-def run_mitsuba(res: int, spp: int) -> list[dict]:
+def run_mitsuba(res: int, spp: int, variants: list[str]) -> list[dict]:
     # Debian's default libLLVM 14/15 crashes Dr.Jit's LLVM backend; libllvm19 works
     llvm19 = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
     if "DRJIT_LIBLLVM_PATH" not in os.environ and os.path.exists(llvm19):
@@ -93,7 +93,7 @@ def run_mitsuba(res: int, spp: int) -> list[dict]:
     with tempfile.TemporaryDirectory() as tmp:
         sphere.export(f"{tmp}/sphere.ply")
         floor.export(f"{tmp}/floor.ply")
-        for variant in ("llvm_ad_rgb", "scalar_rgb"):
+        for variant in variants:
             try:
                 mi.set_variant(variant)
             except Exception as e:  # LLVM missing: see README for libllvm19
@@ -127,6 +127,8 @@ def main() -> None:
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--res", type=int, default=256)
     ap.add_argument("--device", default="cpu")
+    ap.add_argument("--mitsuba-variants", default="llvm_ad_rgb,scalar_rgb",
+                    help="comma-separated Mitsuba variants to time beside ours (make gpu-check: cuda_ad_rgb,llvm_ad_rgb)")
     a = ap.parse_args()
     print(f"\n{a.res}x{a.res}, {a.spp} spp, depth {DEPTH}, 82k-triangle sphere + floor, uniform sky\n")
     print("| renderer | seconds | M samples/s | M rays/s | CPU s (all threads) | M samples / CPU s | "
@@ -134,7 +136,7 @@ def main() -> None:
     print("|---|---:|---:|---:|---:|---:|---:|---:|", flush=True)
     base = None
     runs = [lambda: [run_ours(a.res, a.spp, a.device, False)], lambda: [run_ours(a.res, a.spp, a.device, True)],
-            lambda: run_mitsuba(a.res, a.spp)]
+            lambda: run_mitsuba(a.res, a.spp, a.mitsuba_variants.split(","))]
     for run in runs:
         for r in run():
             per_cpu = a.res * a.res * a.spp / r["cpu_seconds"]

@@ -59,7 +59,7 @@ def _spec(path: Path):
         return pickle.load(f)
 
 
-def our_image(scene: str, sampler: str, spp: int, seed: int, spec: Path) -> np.ndarray:
+def our_image(scene: str, sampler: str, spp: int, seed: int, spec: Path, device: str) -> np.ndarray:
     import renderer
     from renderer.session import RenderSession
     from renderer.settings import settings_for
@@ -72,18 +72,18 @@ def our_image(scene: str, sampler: str, spp: int, seed: int, spec: Path) -> np.n
     else:
         desc = renderer.load_scene(ROOT / "scenes" / {"thinfilm": "fig1_thinfilm.pbrt", "beach": "beach.pbrt"}[scene])
     desc.sampler.spp = spp          # the sampler's pattern is the run's sample count, as pbrt's --spp
-    s = RenderSession(desc, settings_for(desc, seed=seed, width=res[0], height=res[1], sampler=sampler))
+    s = RenderSession(desc, settings_for(desc, seed=seed, width=res[0], height=res[1], sampler=sampler), device=device)
     s.run(spp)
     return s.image()
 
 
-def mitsuba_image(sampler: str, spp: int, seed: int, spec: Path) -> np.ndarray:
+def mitsuba_image(sampler: str, spp: int, seed: int, spec: Path, variant: str) -> np.ndarray:
     llvm19 = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"     # Dr.Jit's LLVM backend needs libllvm19 here
     if "DRJIT_LIBLLVM_PATH" not in os.environ and os.path.exists(llvm19):
         os.environ["DRJIT_LIBLLVM_PATH"] = llvm19
     import mitsuba as mi
 
-    mi.set_variant("llvm_ad_rgb")
+    mi.set_variant(variant)
     from crosscheck_scenes import mitsuba_scene
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -94,9 +94,9 @@ def mitsuba_image(sampler: str, spp: int, seed: int, spec: Path) -> np.ndarray:
 
 def child(argv: list[str]) -> None:
     """One configuration in this process: render and save the image as .npy."""
-    who, scene, sampler, spp, seed, out, spec = argv
-    img = mitsuba_image(sampler, int(spp), int(seed), Path(spec)) if who == "mitsuba" else \
-        our_image(scene, sampler, int(spp), int(seed), Path(spec))
+    who, scene, sampler, spp, seed, out, spec, device, variant = argv
+    img = mitsuba_image(sampler, int(spp), int(seed), Path(spec), variant) if who == "mitsuba" else \
+        our_image(scene, sampler, int(spp), int(seed), Path(spec), device)
     np.save(out, img)
 
 
@@ -114,11 +114,16 @@ def spec_file(scene: str, spp: int, out: Path) -> Path:
     return path
 
 
+#: Where each renderer runs: our Warp device and Mitsuba's variant (``make gpu-check``: cuda, cuda_ad_rgb).
+TARGET = {"device": "cpu", "variant": "llvm_ad_rgb"}
+
+
 def run(who: str, scene: str, sampler: str, spp: int, seed: int, out: Path) -> tuple[float, float]:
     """Whole-process (wall, CPU) seconds of one configuration."""
     spec = spec_file(scene, spp, out.parent)
     t0, c0 = time.perf_counter(), _children_cpu()
-    subprocess.run([sys.executable, __file__, "--child", who, scene, sampler, str(spp), str(seed), str(out), str(spec)],
+    subprocess.run([sys.executable, __file__, "--child", who, scene, sampler, str(spp), str(seed), str(out), str(spec),
+                    TARGET["device"], TARGET["variant"]],
                    check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     return time.perf_counter() - t0, _children_cpu() - c0
 
@@ -193,7 +198,10 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenes", nargs="+", choices=list(SIZES), default=list(SIZES))
     ap.add_argument("--out", type=Path, default=ROOT / "out" / "time_to_error")
+    ap.add_argument("--device", default="cpu", help="our Warp device (default: cpu)")
+    ap.add_argument("--mitsuba-variant", default="llvm_ad_rgb", help="e.g. cuda_ad_rgb (default: llvm_ad_rgb)")
     a = ap.parse_args()
+    TARGET.update(device=a.device, variant=a.mitsuba_variant)
     a.out.mkdir(parents=True, exist_ok=True)
     rows = measure(a.scenes, a.out)
     with open(a.out / "time_to_error.csv", "w", newline="") as f:

@@ -143,6 +143,12 @@ def build_parser() -> argparse.ArgumentParser:
                    "(default: about 30 s of work each)")
     r.add_argument("--ray-workers", type=_positive, metavar="N", help="tasks in flight (default: one per CPU, "
                    "or per GPU with --device cuda; --threads sets each task's CPUs)")
+    c = p.add_argument_group("CUDA ahead of time (no GPU needed)")
+    c.add_argument("--compile-only", action="store_true", help="with --device cuda: compile every kernel a render "
+                   "of the scene launches into the kernel cache ($WARP_CACHE_PATH), print each one's registers, "
+                   "local memory, code size and compile time, and render nothing")
+    c.add_argument("--arch", metavar="LIST", help="architectures for --compile-only, e.g. sm_75,sm_86,sm_90 "
+                   "(default: this machine's GPU, else sm_90)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.add_argument("--stats", action="store_true", help="as pbrt-v4: print statistics at the end (scene, rays, "
                    "memory, time per phase)")
@@ -292,6 +298,27 @@ def main(argv: list[str] | None = None) -> int:
             return 128 + (stop.signum or signal.SIGINT)
 
 
+def _compile_only(scene, settings, args: argparse.Namespace) -> int:
+    """``--compile-only``: the scene's CUDA kernels into the cache, and their table on stdout."""
+    from renderer.device.cuda_compile import compile_kernels, parse_archs, table
+    from renderer.device.scene import upload
+    from renderer.errors import RenderError
+    from renderer.integrators.kernels import render_kernels
+
+    if not args.compile_only:
+        raise RenderError("--arch needs --compile-only")
+    if not args.device.startswith("cuda"):
+        raise RenderError("--compile-only compiles CUDA kernels: add --device cuda")
+    archs = parse_archs(args.arch)
+    # the kernels depend on the scene's features only, which an upload to the CPU determines
+    ds = upload(scene, "cpu", settings.width, settings.height, nee=settings.nee, thin_film=settings.thin_film)
+    kernels = render_kernels(ds.features, settings.sampler.name == "independent", bool(args.aov or args.denoise))
+    say = (lambda _m: None) if args.quiet else (lambda m: print(m, file=sys.stderr, flush=True))
+    rows = compile_kernels(kernels, archs, say)
+    print(table(rows))
+    return EXIT_OK
+
+
 def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
     """The command after its arguments are parsed; errors and interrupts are main's."""
     from renderer.api import load_scene, open_session, settings_for
@@ -323,6 +350,8 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
     settings = settings_for(scene, seed=args.seed, width=w, height=h, max_depth=args.max_depth, nee=not args.no_nee,
                             rr_depth=args.rr_depth, thin_film=args.thin_film, sampler=args.sampler)
     x0, x1, y0, y1 = region(settings.width, settings.height)       # an empty region fails here
+    if args.compile_only or args.arch:
+        return _compile_only(scene, settings, args)
     ref = None
     if args.reference:
         from renderer.io.images import read_image

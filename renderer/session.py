@@ -89,7 +89,7 @@ class RenderSession:
         from renderer.device.scene import upload
         from renderer.device.film import Film
         from renderer.device.sampler import upload_sampler
-        from renderer.integrators.path import integrator_kernel
+        from renderer.integrators.kernels import render_kernels
 
         require_device(device)
         self.scene = scene
@@ -100,9 +100,11 @@ class RenderSession:
         W, H = self.ds.width, self.ds.height
         self.film = Film(W, H, device)
         self.sampler = upload_sampler(settings.sampler, W, H, device)
-        self.kernel = integrator_kernel(self.ds.features, settings.sampler.name == "independent")
+        kernels = render_kernels(self.ds.features, settings.sampler.name == "independent")
+        self.kernel = kernels["path"]
         t0 = time.perf_counter()
-        wp.load_module(self.kernel.module, device=device)
+        for k in kernels.values():
+            wp.load_module(k.module, device=device)
         own = [w] if (w := settings.sampler.warning()) else []
         self.stats = RenderStats(width=W, height=H, compile_seconds=time.perf_counter() - t0,
                                  warnings=list(dict.fromkeys(scene.warnings + self.ds.warnings + own)))   # each once

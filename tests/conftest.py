@@ -20,3 +20,33 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
             path = Path(str(item.fspath)).relative_to(ROOT)
             group = "ray" if path.parts[:2] == ("tests", "cluster") else path.as_posix()
             item.add_marker(pytest.mark.xdist_group(group))
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption("--device", default="cpu", help="the Warp device every render of the tests uses by default "
+                     "(make gpu-check: cuda); tests that name a device keep it")
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _default_device(pytestconfig: pytest.Config):
+    """With ``--device cuda``, the renderer's entry points default to that device instead of the CPU,
+    so the same physics tests (furnaces, energy, determinism, resume) run on a GPU."""
+    device = pytestconfig.getoption("--device")
+    if device == "cpu":
+        yield
+        return
+    import inspect
+
+    import renderer.api
+    import renderer.session
+
+    saved = []
+    for fn in (renderer.api.render, renderer.api.open_session, renderer.session.RenderSession.__init__):
+        names = [p.name for p in inspect.signature(fn).parameters.values()
+                 if p.default is not inspect.Parameter.empty and p.kind is p.POSITIONAL_OR_KEYWORD]
+        saved.append((fn, fn.__defaults__))
+        fn.__defaults__ = tuple(device if n == "device" else d for n, d in zip(names[-len(fn.__defaults__):],
+                                                                                  fn.__defaults__))
+    yield
+    for fn, defaults in saved:
+        fn.__defaults__ = defaults

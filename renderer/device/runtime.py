@@ -19,6 +19,10 @@ def init_warp(quiet: bool = True) -> None:
 
     # Warp's log level (1.19 dropped config.quiet): the banner and per-module load times are INFO
     wp.config.log_level = wp.LOG_WARNING if quiet else wp.LOG_INFO
+    # CUDA kernels load as cubins for the GPU's exact architecture, never as PTX that the driver
+    # JIT-compiles: what runs is what `render --compile-only` compiled and measured, under the
+    # name it wrote into the cache (Warp would otherwise pick PTX by driver version, for sm_75)
+    wp.config.cuda_output = "cubin"
     # Warp itself reads $WARP_CACHE_PATH and keeps one subfolder per Warp version; setting
     # config.kernel_cache_dir to it here would, on a second call, point later compiles at the
     # unversioned folder (where the next process never looks, and Warp warns about them)

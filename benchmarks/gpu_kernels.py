@@ -1,0 +1,69 @@
+"""What the render kernels will cost on a GPU, for every scene in ``scenes/`` and for a kernel
+with every feature at once (every material, light, bump, cut-outs, mixes, subsurface,
+dispersion): ``--compile-only``'s table from a cold kernel cache, so the compile seconds are
+NVRTC's own. No GPU needed.
+
+    python benchmarks/gpu_kernels.py [--arch sm_90] [--scenes scenes/demo.pbrt ...] [--out out/gpu_kernels.md]
+
+Scenes with a recipe need their assets (``assets-gen recipe SCENE``) first."""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT)]
+
+
+def every_feature():
+    """The feature set of a scene that uses every material, light family and kernel option."""
+    from renderer import lights, materials
+    from renderer.device.scene import Features
+
+    kinds = tuple(lights.REGISTRY)
+    return Features(materials=tuple(sorted(materials.REGISTRY)), bump=True, lights=kinds,
+                    escaping=tuple(k for k in kinds if hasattr(lights.REGISTRY[k], "escaped")), nee=True,
+                    subsurface=True, alpha=True, mix=True, dispersion=True)
+
+
+def scene_features(path: Path):
+    from renderer.api import load_scene, settings_for
+    from renderer.device.scene import upload
+
+    desc = load_scene(path)
+    settings = settings_for(desc)
+    return upload(desc, "cpu", 8, 8, thin_film=settings.thin_film).features, settings.sampler.name == "independent"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--arch", default="sm_90")
+    ap.add_argument("--scenes", nargs="*", type=Path, help="default: every scene in scenes/")
+    ap.add_argument("--out", type=Path, default=ROOT / "out" / "gpu_kernels.md")
+    ap.add_argument("--cache", type=Path, help="kernel cache to fill (default: a new, empty one)")
+    a = ap.parse_args()
+    os.environ["WARP_CACHE_PATH"] = str(a.cache or tempfile.mkdtemp(prefix="gpu_kernels_"))
+    from renderer.device.cuda_compile import compile_kernels, parse_archs, table
+    from renderer.integrators.kernels import render_kernels
+
+    archs = parse_archs(a.arch)
+    paths = a.scenes if a.scenes is not None else sorted((ROOT / "scenes").glob("*.pbrt"))
+    jobs = [(p.name, *scene_features(p)) for p in paths] + [("every feature", every_feature(), False)]
+    say = lambda m: print(m, file=sys.stderr, flush=True)  # noqa: E731
+    parts = [f"Kernel cache: {os.environ['WARP_CACHE_PATH']} (cold at the start; a kernel two scenes share "
+             "compiles once and shows as cached the second time)", ""]
+    for name, features, independent in jobs:
+        say(f"== {name}: {features}")
+        rows = compile_kernels(render_kernels(features, independent, aov=True), archs, say)
+        parts += [f"### {name}", "", table(rows), ""]
+        a.out.parent.mkdir(parents=True, exist_ok=True)
+        a.out.write_text("\n".join(parts) + "\n")
+        print("\n".join(parts[-4:]), flush=True)
+    say(f"wrote {a.out}")
+
+
+if __name__ == "__main__":
+    main()

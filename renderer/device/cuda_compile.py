@@ -1,0 +1,151 @@
+"""Compiling a render's CUDA kernels ahead of time, on a machine with or without a GPU.
+
+Warp ships NVRTC, so a cubin for any architecture it supports can be built here and written into
+Warp's kernel cache (``$WARP_CACHE_PATH``) under the very name a render on such a GPU looks up:
+the module's content hash, and ``.smXX.cubin`` (renderer kernels always load cubins, see
+:func:`renderer.device.runtime.init_warp`, so what runs is what was compiled and measured). Users
+compile on a login node and render on GPU nodes, or warm a cluster's shared cache. Each cubin is
+then read for its resources (:mod:`renderer.device.cubin`)."""
+from __future__ import annotations
+
+import re
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from renderer.device.cubin import KernelResources, read_resources
+from renderer.errors import RenderError
+
+#: The architecture compiled for when none is named and no GPU is present: sm_90 (H100/H200).
+DEFAULT_ARCH = 90
+@dataclass(frozen=True)
+class Budget:
+    """Per-thread resources a render kernel may use on sm_90."""
+
+    registers: int
+    stack_bytes: int
+
+
+#: The design's budget (DESIGN.md, "GPU budget"): 128 registers (16 resident warps per SM) and a
+#: 1 KB local frame, spills included.
+TARGET = Budget(registers=128, stack_bytes=1024)
+#: What CI holds the representative scene's kernels to today (tests/device): the figures measured
+#: when it was set, so a change that needs more stack or breaks CUDA compilation fails. The
+#: registers are at the hardware's 255 until the path kernel is split (docs/gpu.md).
+BUDGET = Budget(registers=255, stack_bytes=1152)
+#: Seconds between "still compiling" lines: a GPU user must never wait in silence.
+HEARTBEAT_SECONDS = 15.0
+
+
+@dataclass(frozen=True)
+class CompiledKernel:
+    """One render kernel compiled for one architecture."""
+
+    name: str                        # "path", "film", "aov"
+    arch: int
+    seconds: float                   # NVRTC's wall time (0 when the cache already held it)
+    cached: bool
+    cubin: Path
+    resources: KernelResources
+
+
+def parse_archs(text: str | None) -> list[int]:
+    """``"sm_75,sm_86,90"`` → [75, 86, 90]; None → the local GPU's architecture, else sm_90.
+    Architectures NVRTC cannot target are refused, naming the ones it can."""
+    import warp as wp
+
+    from renderer.device.runtime import init_warp
+
+    init_warp()
+    if text is None:
+        return [wp.get_device("cuda").arch] if wp.is_cuda_available() else [DEFAULT_ARCH]
+    supported = sorted(wp._src.context.runtime.nvrtc_supported_archs)
+    archs = []
+    for item in text.split(","):
+        digits = item.strip().lower().removeprefix("sm_").removeprefix("sm")
+        if not digits.isdigit() or int(digits) not in supported:
+            raise RenderError(f"--arch: {item.strip()!r} is not an architecture this Warp's NVRTC compiles for "
+                              f"(supported: {', '.join(f'sm_{a}' for a in supported)})")
+        archs.append(int(digits))
+    return list(dict.fromkeys(archs))
+
+
+def cubin_path(module, arch: int) -> Path:
+    """Where Warp's runtime looks for ``module``'s cubin on a GPU of ``arch`` (CUDA launches use
+    256-thread blocks, whose module variant this is)."""
+    import warp as wp
+
+    ident = module.get_module_identifier(block_dim=256)
+    return Path(wp.config.kernel_cache_dir) / ident / f"{ident}.sm{arch}.cubin"
+
+
+def compile_kernels(kernels: dict[str, object], archs: list[int],
+                    say: Callable[[str], None] = lambda _m: None) -> list[CompiledKernel]:
+    """Compile each kernel for each architecture into the kernel cache (skipping what it holds)
+    and read back its resources. ``say`` gets a line before each compile and every
+    :data:`HEARTBEAT_SECONDS` while NVRTC runs."""
+    import warp as wp
+
+    from renderer.device.runtime import init_warp
+
+    init_warp()
+    out = []
+    for arch in archs:
+        for name, kernel in kernels.items():
+            module = kernel.module
+            target = cubin_path(module, arch)
+            cached = target.is_file()
+            say(f"compile: {name} kernel for sm_{arch}" + (" (in the cache)" if cached else " ..."))
+            t0 = time.perf_counter()
+            with _heartbeat(say, f"compile: {name} kernel for sm_{arch}", t0):
+                wp.compile_aot_module(module, arch=arch, use_ptx=False)
+            seconds = 0.0 if cached else time.perf_counter() - t0
+            if not target.is_file():
+                raise RenderError(f"NVRTC wrote no cubin at {target}")
+            out.append(CompiledKernel(name, arch, seconds, cached, target, _entry(read_resources(target), kernel.key)))
+    return out
+
+
+def _entry(found: list[KernelResources], key: str) -> KernelResources:
+    """The forward entry point of the kernel ``key`` among a cubin's (Warp names it after the key
+    with every non-word character made ``_``, then a hash)."""
+    prefix = re.sub(r"\W", "_", key) + "_"
+    for r in found:
+        if r.name.startswith(prefix) and r.name.endswith("_cuda_kernel_forward"):
+            return r
+    raise RenderError(f"the cubin has no entry point for kernel {key} (found: {', '.join(r.name for r in found)})")
+
+
+class _heartbeat:
+    """A daemon thread that reports progress while a blocking native compile runs."""
+
+    def __init__(self, say: Callable[[str], None], what: str, t0: float):
+        self.say, self.what, self.t0 = say, what, t0
+        self.done = threading.Event()
+
+    def __enter__(self) -> "_heartbeat":
+        def beat() -> None:
+            while not self.done.wait(HEARTBEAT_SECONDS):
+                self.say(f"{self.what}: still compiling ({time.perf_counter() - self.t0:.0f} s)")
+
+        threading.Thread(target=beat, daemon=True).start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.done.set()
+
+
+def table(rows: list[CompiledKernel]) -> str:
+    """The per-kernel table ``--compile-only`` prints (a Markdown table, pasteable into docs)."""
+    head = ("| kernel | arch | registers | stack frame B | LDL / STL | shared B | params B | code KB | compile s |\n"
+            "|---|---|---:|---:|---:|---:|---:|---:|---:|")
+    lines = [head]
+    for r in rows:
+        q = r.resources
+        spills = "n/a" if q.local_loads < 0 else f"{q.local_loads} / {q.local_stores}"
+        secs = "cached" if r.cached else f"{r.seconds:.1f}"
+        lines.append(f"| {r.name} | sm_{r.arch} | {q.registers} | {q.stack_bytes} | {spills} | {q.shared_bytes} | "
+                     f"{q.param_bytes} | {q.code_bytes / 1024:.0f} | {secs} |")
+    return "\n".join(lines)

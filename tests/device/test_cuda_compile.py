@@ -1,0 +1,114 @@
+"""CUDA without a GPU: render kernels compile for sm_90 through Warp's NVRTC, land in the kernel
+cache under the name a GPU render looks up, and stay within the GPU budget
+(:data:`renderer.device.cuda_compile.BUDGET`) that docs/gpu.md explains."""
+from __future__ import annotations
+
+from pathlib import Path
+from types import MethodType, SimpleNamespace
+
+import pytest
+import warp as wp
+
+from renderer.cli import main
+from renderer.device.cubin import read_resources, tool
+from renderer.device.cuda_compile import BUDGET, compile_kernels, cubin_path, parse_archs
+from renderer.device.runtime import init_warp
+
+ROOT = Path(__file__).resolve().parents[2]
+#: The scene whose kernels CI compiles: glass, metals, an area light, a soft sun, depth of field.
+REPRESENTATIVE = ROOT / "scenes" / "demo.pbrt"
+
+
+def gpu_like(arch: int, driver: tuple[int, int]) -> SimpleNamespace:
+    """A stand-in CUDA device whose format, architecture and suffix come from Warp's own Device
+    methods, so the name below is the one ``Module.load`` computes on such a GPU."""
+    from warp._src.context import Device, runtime
+
+    dev = SimpleNamespace(is_cpu=False, is_cuda=True, arch=arch, alias="cuda:0", is_cubin_supported=True,
+                          runtime=SimpleNamespace(driver_version=driver, toolkit_version=runtime.toolkit_version))
+    for name in ("get_cuda_output_format", "get_cuda_compile_arch", "_get_cuda_arch_suffix"):
+        setattr(dev, name, MethodType(getattr(Device, name), dev))
+    return dev
+
+
+def test_cubin_is_what_a_gpu_render_loads():
+    """A driver newer than the toolkit would make Warp choose PTX for sm_75; the renderer's Warp
+    loads cubins for the exact architecture, and finds the one compiled here without compiling."""
+    from renderer.device.film import accumulate
+
+    init_warp()
+    assert wp.config.cuda_output == "cubin"
+    module = accumulate.module
+    [row] = compile_kernels({"film": accumulate}, [90])
+    gpu = gpu_like(90, driver=(99, 0))
+    assert gpu.get_cuda_output_format() == "cubin" and gpu.get_cuda_compile_arch() == 90
+    ident = module.get_module_identifier(block_dim=256)
+    looked_up = Path(wp.config.kernel_cache_dir) / ident / module._get_compile_output_name(gpu, block_dim=256)
+    assert looked_up == row.cubin == cubin_path(module, 90) and looked_up.is_file()
+    module.get_module_hash(256)
+    # Module.load's own step: False means "cached, nothing compiled"
+    assert module._compile(gpu, str(looked_up.parent), looked_up.name, 90, options=module.resolved_options[256]) is False
+
+
+def test_cubin_resources_are_read():
+    from renderer.device.film import accumulate
+
+    [row] = compile_kernels({"film": accumulate}, [90])
+    [entry] = [r for r in read_resources(row.cubin) if r.name.startswith("accumulate_")]
+    assert 0 < entry.registers <= 255 and entry.code_bytes > 1000 and entry.param_bytes > 0
+    assert entry.stack_bytes == 0       # a few integer operations need no local memory
+    if tool("nvdisasm"):
+        assert entry.local_loads == 0 and entry.local_stores == 0
+
+
+@pytest.mark.parametrize("text,why", [("sm_12", "not an architecture"), ("gpu", "not an architecture")])
+def test_bad_arch_refused(text, why, capsys):
+    assert main([str(REPRESENTATIVE), "--device", "cuda", "--compile-only", "--arch", text]) == 2
+    assert why in capsys.readouterr().err
+
+
+def test_compile_only_needs_cuda(capsys):
+    assert main([str(REPRESENTATIVE), "--compile-only"]) == 2
+    assert "--device cuda" in capsys.readouterr().err
+
+
+def test_archs_parse():
+    assert parse_archs("sm_75, 86,sm_90,sm_90") == [75, 86, 90]
+
+
+def test_representative_scene_compiles_within_budget(capsys):
+    """Every kernel a render of the demo launches compiles for sm_90 and fits the budget."""
+    assert main([str(REPRESENTATIVE), "--device", "cuda", "--compile-only", "--arch", "sm_90", "--quiet"]) == 0
+    rows = [line.split("|")[1:-1] for line in capsys.readouterr().out.splitlines()[2:]]
+    figures = {r[0].strip(): (int(r[2]), int(r[3])) for r in rows}
+    assert set(figures) == {"path", "film"}
+    for name, (registers, stack) in figures.items():
+        assert registers <= BUDGET.registers, (name, registers)
+        assert stack <= BUDGET.stack_bytes, (name, stack)
+
+
+def test_gpu_check_refuses_without_a_gpu():
+    import subprocess
+    import sys
+
+    if wp.is_cuda_available():
+        pytest.skip("this machine has a GPU: make gpu-check runs for real")
+    done = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "gpu_check.py"), "--out", "/nonexistent/x"],
+                          capture_output=True, text=True)
+    assert done.returncode == 2 and "no CUDA GPU" in done.stderr
+    assert not Path("/nonexistent/x").exists()
+
+
+def test_gpu_check_pipeline_on_the_cpu(tmp_path):
+    """The scene comparison of make gpu-check, run CPU against CPU: the same seed on the same
+    device is the same image, so the ratio is 0 and the verdict holds."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "gpu_check.py"), "--device", "cpu",
+                           "--out", str(tmp_path), "--scenes", str(ROOT / "scenes" / "ar_coating.pbrt"),
+                           "--skip", "compile", "tests", "mitsuba", "beach", "--spp", "2", "--width", "16"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-2000:]
+    report = (tmp_path / "report.md").read_text()
+    assert "| ar_coating.pbrt |" in report and "| 0.00 | same within noise |" in report
