@@ -4,9 +4,9 @@ out-of-memory kill halfway through an upload.
 
 The estimate counts the large arrays only, each as many times as it is held at the peak of an
 upload: meshes on the host and on the device plus Warp's BVH nodes; instances with their
-transforms and the top-level BVH; image textures and environment maps decoded to float32, then
-pooled and copied to the device (with their sampling CDFs); the film's float64 sums. Image
-sizes come from file headers (no decoding). It is meant to be within a factor of two of the
+transforms and the top-level BVH; image textures and environment maps (8-bit files as bytes,
+others as float32, with their sampling CDFs); the film's float64 sums. Image sizes come from
+file headers (no decoding). It is meant to be within a factor of two of the
 measured peak (tests check it against real renders), which is enough to tell a 2 GB scene
 from a 40 GB one."""
 from __future__ import annotations
@@ -25,10 +25,14 @@ _BVH_PER_TRIANGLE = 64
 #: object matrices and bounds on the device, and its top-level BVH nodes (measured: about 880
 #: bytes each at 800,000 instances)
 _INSTANCE = 900
-#: a decoded RGB float32 texel, held in the decoded image, the texture pool and the device copy
+#: a float texture's texel: float32 RGB, held in the decoded image, its RGB copy and the device pool
 _TEXEL = 12 * 3
-#: an environment texel: its RGB plus its CDF entry, held about three times while uploading
+#: a float environment texel: its RGB plus its CDF entry, held about three times while uploading
 _ENV_TEXEL = 16 * 3
+#: an 8-bit file's texels stay 8-bit (one byte per channel, renderer/io/images.py): held on the
+#: host and again on a CUDA device; an 8-bit environment texel adds its float32 CDF entry, twice
+_CODE_BYTE = 2
+_ENV_CDF = 4 * 2
 #: a film pixel: float64 RGB sums plus the float32 image and per-row scratch
 _PIXEL = 48
 #: what the process itself takes before a scene (Python, numpy, Warp, the kernels)
@@ -43,38 +47,36 @@ def machine_memory() -> int:
 def image_size(path: Path) -> tuple[int, int]:
     """(width, height) of an image file from its header; (0, 0) when it cannot be read (reading it
     for real reports the error with the scene's location)."""
+    return _header(path)[:2]
+
+
+def _header(path: Path) -> tuple[int, int, int, bool]:
+    from renderer.io.images import image_header
+
     try:
-        if path.suffix.lower() == ".exr":
-            import OpenEXR
-
-            with OpenEXR.File(str(path), header_only=True) as f:
-                lo, hi = f.header()["dataWindow"]
-                return int(hi[0] - lo[0] + 1), int(hi[1] - lo[1] + 1)
-        from PIL import Image
-
-        with Image.open(path) as im:
-            return im.size
-    except Exception:   # any decoder's error: the real read reports it properly
-        return 0, 0
+        return image_header(path)
+    except OSError:   # the real read reports it properly
+        return 0, 0, 0, False
 
 
-def _images(desc: SceneDescription) -> list[tuple[str, Path, int, int, object]]:
-    """(what, path, width, height, scene location) of every image texture and environment map."""
+def _images(desc: SceneDescription) -> list[tuple[str, Path, int, int, int, object]]:
+    """(what, path, width, height, bytes per texel, scene location) of every image texture and
+    environment map."""
     found = []
     for t in desc.textures.values():
         name = t.params.params.get("filename")
         if t.kind == "imagemap" and name is not None and name.values:
             path = t.base_dir / str(name.values[0])
-            found.append(("texture image", path, *image_size(path), t.loc))
+            w, h, c, eight_bit = _header(path)
+            per = (1 if c < 3 else 3) * _CODE_BYTE if eight_bit else _TEXEL
+            found.append(("texture image", path, w, h, per, t.loc))
     for light in desc.lights:
         fname = light.values.get("filename") if light.kind == "infinite" else None
         if fname:
-            found.append(("environment image", Path(fname), *image_size(Path(fname)), light.loc))
+            w, h, c, eight_bit = _header(Path(fname))
+            per = (1 if c < 3 else 3) * _CODE_BYTE + _ENV_CDF if eight_bit else _ENV_TEXEL
+            found.append(("environment image", Path(fname), w, h, per, light.loc))
     return found
-
-
-def _image_bytes(what: str, width: int, height: int) -> int:
-    return width * height * (_TEXEL if what == "texture image" else _ENV_TEXEL)
 
 
 def estimate(desc: SceneDescription, width: int, height: int) -> int:
@@ -83,7 +85,7 @@ def estimate(desc: SceneDescription, width: int, height: int) -> int:
     for m in desc.meshes:
         total += 2 * len(m.positions) * _VERTEX + len(m.indices) * (2 * _TRIANGLE + _BVH_PER_TRIANGLE)
     total += sum(len(s.transforms) * len(s.shapes) for s in desc.instance_sets) * _INSTANCE
-    total += sum(_image_bytes(what, w, h) for what, _, w, h, _ in _images(desc))
+    total += sum(w * h * per for _, _, w, h, per, _ in _images(desc))
     return total
 
 
@@ -93,13 +95,12 @@ def check_fits(desc: SceneDescription, width: int, height: int, limit_bytes: int
     need = estimate(desc, width, height)
     limit = machine_memory() if limit_bytes is None else limit_bytes
     if need > limit:
-        biggest = max(_images(desc), key=lambda i: _image_bytes(i[0], i[2], i[3]), default=None)
+        biggest = max(_images(desc), key=lambda i: i[2] * i[3] * i[4], default=None)
         culprit, where = "", desc.path or "the scene"
-        if biggest is not None and 2 * _image_bytes(biggest[0], biggest[2], biggest[3]) > need:
-            what, path, w, h, loc = biggest
+        if biggest is not None and 2 * biggest[2] * biggest[3] * biggest[4] > need - _BASE:   # most of the scene
+            what, path, w, h, per, loc = biggest
             where = loc or where
-            culprit = (f" (the {what} {path}, {w}x{h} pixels by its header, about "
-                       f"{_image_bytes(what, w, h) / 2**30:.1f} GiB of it)")
+            culprit = f" (the {what} {path}, {w}x{h} pixels by its header, about {w * h * per / 2**30:.1f} GiB of it)"
         raise RenderError(f"{where}: rendering needs about {need / 2**30:.1f} GiB{culprit}, more "
                           f"than the {limit / 2**30:.1f} GiB limit (this machine's memory unless --memory-limit says "
                           "otherwise); lower the resolution, texture sizes or instance counts, or raise the limit")

@@ -20,17 +20,22 @@ def resolved(given: dict[str, Any], loc: Location | None, base_dir: Path | None,
     return {**given, "filename": str(path)}
 
 
-def read_light_image(values: dict[str, Any], loc: Location | None, what: str) -> np.ndarray:
-    """The (H, W, C) linear float32 pixels of ``values["filename"]`` (8-bit files decoded from sRGB)."""
-    from renderer.io.images import read_image
+def read_light_image(values: dict[str, Any], loc: Location | None, what: str, stored: bool = False) -> np.ndarray:
+    """The (H, W, C) linear float32 pixels of ``values["filename"]`` (8-bit files decoded from sRGB);
+    with ``stored``, an 8-bit file's codes instead (uint8, one or three channels: every code
+    decodes to a valid radiance, so only float files are checked)."""
+    from renderer.io.images import linear, read_stored
 
     path = Path(values["filename"])
     if not path.is_file():
         raise MissingFileError(path, loc, what)
     try:
-        image = read_image(path, srgb=True)
+        image = read_stored(path, max_channels=3 if stored else None)
     except OSError as e:
         raise SceneError(f"{what}: {e}", loc) from e
+    if image.dtype == np.uint8 and stored:
+        return image if image.shape[2] != 2 else np.ascontiguousarray(image[..., :1])   # grey + alpha: grey
+    image = linear(image, srgb=True)
     if not np.all(np.isfinite(image)) or np.any(image < 0):
         raise SceneError(f"{what} contains negative, NaN or infinite values", loc)
     return np.ascontiguousarray(image, dtype=np.float32)

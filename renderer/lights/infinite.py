@@ -44,7 +44,9 @@ MAP_CONSTANT = 0
 MAP_EQUAL_AREA = 1
 MAP_LATLONG = 2
 MAP_PORTAL = 3                  # an equal-area map (or L) rectified over a portal's directions
-ROW = Row(ints=("mapping", "width", "height"))
+#: channels: 0 when the pixels are float RGB in the vector pool, 1 or 3 when they are 8-bit codes
+#: in the code pool; lut: where the 256 values of those codes sit in the light's float data
+ROW = Row(ints=("mapping", "width", "height", "channels", "lut"))
 K = ROW.K
 
 
@@ -71,29 +73,79 @@ def _mapping(image: np.ndarray, loc: Location | None) -> int:
     raise SceneError(f"environment image must be square (equal-area) or 2:1 (lat-long), got {w}x{h}", loc)
 
 
-def distribution_function(rgb: np.ndarray, mapping: int) -> tuple[np.ndarray, np.ndarray | None]:
+class CodeRows:
+    """An 8-bit map's linear RGB, decoded one row at a time: ``rows[y]`` is row y (float32 (w, 3)),
+    ``rows[y0:y1]`` a band; ``shape`` is (h, w, 3). Nothing image-sized is ever decoded."""
+
+    def __init__(self, codes: np.ndarray, values: np.ndarray):
+        self.codes, self.values = codes, values
+        self.shape = (*codes.shape[:2], 3)
+
+    def __getitem__(self, rows) -> np.ndarray:
+        v = self.values[self.codes[rows]]
+        return v if v.shape[-1] == 3 else np.repeat(v, 3, axis=-1)
+
+
+class _MaxChannel:
+    """The sampling function's rows (the largest channel of each pixel), for distribution_2d."""
+
+    def __init__(self, rgb):
+        self.rgb, self.shape = rgb, rgb.shape[:2]
+
+    def __getitem__(self, y: int) -> np.ndarray:
+        return self.rgb[y].max(axis=-1)
+
+
+def distribution_function(rgb, mapping: int) -> tuple[object, np.ndarray | None]:
     """The function the map is importance sampled by, as (max channel, per-row weight): sin θ for
-    lat-long (the solid angle of a row), none for the equal-area square."""
+    lat-long (the solid angle of a row), none for the equal-area square. ``rgb`` is a float
+    (h, w, 3) array or :class:`CodeRows`; the max channel is taken a row at a time."""
     h = rgb.shape[0]
     weight = np.sin(np.pi * (np.arange(h) + 0.5) / h) if mapping == MAP_LATLONG else None
-    return rgb.max(axis=2), weight
+    return _MaxChannel(rgb), weight
 
 
-def pbrt_illuminance(rgb: np.ndarray, mapping: int) -> float:
+#: Rows per band when a whole-map sum is taken a band at a time
+_BAND = 256
+
+
+def pbrt_illuminance(rgb, mapping: int) -> float:
     """pbrt-v4's illuminance of a map (ImageInfiniteLight with ``illuminance``): luminance × cos θ
     over the pixel centres above the horizon (+z of the map's frame), times half a pixel's solid
-    angle (2π / pixel count for the equal-area square, which is what pbrt-v4 computes)."""
+    angle (2π / pixel count for the equal-area square, which is what pbrt-v4 computes). Computed a
+    band of rows at a time into one float64 vector of the upper pixels' terms, summed once, so the
+    sum is the one a whole-map computation gives, bit for bit."""
     h, w = rgb.shape[:2]
-    u, v = np.meshgrid((np.arange(w) + 0.5) / w, (np.arange(h) + 0.5) / h)
-    if mapping == MAP_EQUAL_AREA:
-        from renderer.sampling.equal_area import square_to_sphere
-        cos_t = square_to_sphere(np.stack([u, v], -1).reshape(-1, 2))[:, 2].reshape(h, w)
-        half_pixel = 2.0 * np.pi / (w * h)
-    else:                                       # lat-long: a pixel's solid angle varies with its row
-        cos_t = np.cos(np.pi * v)
-        half_pixel = 0.5 * (2.0 * np.pi / w) * (np.pi / h) * np.sin(np.pi * v)
-    up = cos_t > 0
-    return float((luminance(rgb.astype(np.float64))[up] * cos_t[up] * np.broadcast_to(half_pixel, up.shape)[up]).sum())
+    terms, used = np.empty(0), 0
+    for y0 in range(0, h, _BAND):
+        y1 = min(h, y0 + _BAND)
+        u, v = np.meshgrid((np.arange(w) + 0.5) / w, (np.arange(y0, y1) + 0.5) / h)
+        if mapping == MAP_EQUAL_AREA:
+            from renderer.sampling.equal_area import square_to_sphere
+            cos_t = square_to_sphere(np.stack([u, v], -1).reshape(-1, 2))[:, 2].reshape(u.shape)
+            half_pixel = np.broadcast_to(2.0 * np.pi / (w * h), u.shape)
+        else:                                   # lat-long: a pixel's solid angle varies with its row
+            cos_t = np.cos(np.pi * v)
+            half_pixel = 0.5 * (2.0 * np.pi / w) * (np.pi / h) * np.sin(np.pi * v)
+        up = cos_t > 0
+        term = luminance(np.asarray(rgb[y0:y1], dtype=np.float64))[up] * cos_t[up] * half_pixel[up]
+        if used + term.size > terms.size:
+            terms = np.resize(terms, max(2 * terms.size, used + term.size))
+        terms[used:used + term.size] = term
+        used += term.size
+    return float(terms[:used].sum())
+
+
+def _decoded_map(light: LightDesc) -> tuple[np.ndarray | CodeRows, int]:
+    """The map's pixels: 8-bit codes with their sRGB values (a file's one or three channels, kept
+    8-bit), or linear float RGB; and its mapping."""
+    from renderer.io.images import code_values
+
+    stored = read_light_image(light.values, light.loc, "environment image", stored=True)
+    mapping = _mapping(stored, light.loc)
+    if stored.dtype == np.uint8:
+        return CodeRows(stored, code_values(srgb=True)), mapping
+    return np.ascontiguousarray(rgb_of(stored)), mapping
 
 
 def entry(light: LightDesc, tris: np.ndarray | None) -> LightEntry:
@@ -102,26 +154,32 @@ def entry(light: LightDesc, tris: np.ndarray | None) -> LightEntry:
     R = np.asarray(light.light_to_world, dtype=np.float64)[:3, :3]
     E = v["illuminance"]
     e = LightEntry(L=scaled_colour(v, "L", E / np.pi if E > 0 else 1.0),
-                   ints={"mapping": MAP_CONSTANT, "width": 1, "height": 1},
+                   ints={"mapping": MAP_CONSTANT, "width": 1, "height": 1, "channels": 0, "lut": 0},
                    to_world=R, to_light=np.linalg.inv(R), escapes=True)
     if v["filename"] is None and v["portal"] is None:
         return e
     if v["filename"] is None:       # L through a portal: pbrt-v4 makes a 1x1 map of it
         rgb, mapping = np.asarray(v["L"], np.float32).reshape(1, 1, 3), MAP_EQUAL_AREA
     else:
-        image = read_light_image(v, light.loc, "environment image")
-        mapping = _mapping(image, light.loc)
-        rgb = np.ascontiguousarray(rgb_of(image))
+        rgb, mapping = _decoded_map(light)
     k = pbrt_illuminance(rgb, mapping) if E > 0 else 1.0
     factor = (E / k if k > 0 else 0.0) if E > 0 else 1.0
     e.L = np.full(3, v["scale"] * factor)
     if v["portal"] is not None:
+        rgb = rgb[:] if isinstance(rgb, CodeRows) else rgb      # the portal rectifies float pixels
         return _portal_entry(e, rgb, mapping, np.asarray(v["portal"]).reshape(4, 3), light.loc)
     h, w = rgb.shape[:2]
-    cond, marg, _ = distribution_2d(*distribution_function(rgb, mapping))
-    e.ints = {"mapping": mapping, "width": w, "height": h}
-    e.f_data = np.concatenate([cond.ravel(), marg])    # (h, w + 1) conditional CDFs, then the marginal
-    e.v_data = rgb.reshape(-1, 3)
+    lut = 0 if not isinstance(rgb, CodeRows) else h * (w + 1) + h + 1
+    e.f_data = np.empty(h * (w + 1) + h + 1 + (256 if lut else 0), np.float32)   # CDFs [, code values]
+    _, marg, _ = distribution_2d(*distribution_function(rgb, mapping), out=e.f_data[:h * (w + 1)].reshape(h, w + 1))
+    e.f_data[h * (w + 1):h * (w + 1) + h + 1] = marg
+    if isinstance(rgb, CodeRows):
+        e.f_data[lut:] = rgb.values
+        e.c_data = rgb.codes.reshape(-1)
+    else:
+        e.v_data = rgb.reshape(-1, 3)
+    e.ints = {"mapping": mapping, "width": w, "height": h,
+              "channels": rgb.codes.shape[2] if isinstance(rgb, CodeRows) else 0, "lut": lut}
     return e
 
 
@@ -134,7 +192,7 @@ def _portal_entry(e: LightEntry, rgb: np.ndarray, mapping: int, corners: np.ndar
     f = portal.frame(corners, loc)
     n = rgb.shape[0]
     rect = portal.rectified(rgb, e.to_light, f)
-    e.ints = {"mapping": MAP_PORTAL, "width": n, "height": n}
+    e.ints = {"mapping": MAP_PORTAL, "width": n, "height": n, "channels": 0, "lut": 0}
     e.to_world, e.to_light = f.T, f
     e.v_data = np.concatenate([rect.reshape(-1, 3), corners[[0, 2]]]).astype(np.float32)
     return e
@@ -176,7 +234,17 @@ def radiance(lights: Lights, i: int, d: wp.vec3) -> wp.vec3:
     if lights.k[i, K.mapping] == MAP_CONSTANT:
         return lights.L[i]
     xy = _pixel(lights, i, wp.normalize(lights.to_light[i] * d))
-    return wp.cw_mul(lights.L[i], lights.v_pool[lights.v_start[i] + xy[1] * lights.k[i, K.width] + xy[0]])
+    at = xy[1] * lights.k[i, K.width] + xy[0]
+    channels = lights.k[i, K.channels]
+    if channels == 0:
+        return wp.cw_mul(lights.L[i], lights.v_pool[lights.v_start[i] + at])
+    lut = lights.f_start[i] + lights.k[i, K.lut]        # an 8-bit map: its codes' values
+    c = lights.c_start[i] + at * channels
+    if channels == 1:
+        return lights.L[i] * lights.f_pool[lut + int(lights.c_pool[c])]
+    return wp.cw_mul(lights.L[i], wp.vec3(lights.f_pool[lut + int(lights.c_pool[c])],
+                                          lights.f_pool[lut + int(lights.c_pool[c + 1])],
+                                          lights.f_pool[lut + int(lights.c_pool[c + 2])]))
 
 
 @wp.func

@@ -1,7 +1,7 @@
 """The device light table, the same for every kind of light: one row per light (its kind, its
 colour, a few named floats, ints and vectors, a rotation each way) and two shared pools (floats and
 vectors) for what a light needs in bulk: an environment map's pixels and CDFs, an area light's
-triangles and their CDF.
+triangles and their CDF; and a pool of bytes, where an 8-bit environment map stays 8-bit.
 
 A light module names its row entries once with :class:`Row`; device code reads them as constants,
 ``lights.f[i, F.cos_max]``, and the module's host ``entry`` fills them by the same names.
@@ -14,6 +14,8 @@ from typing import Any
 import numpy as np
 import warp as wp
 
+from renderer.device.pools import pooled
+from renderer.errors import RenderError
 from renderer.parameters import Parameter
 
 
@@ -31,6 +33,8 @@ class Lights:
     v_start: wp.array(dtype=int)           # and in the vector pool
     f_pool: wp.array(dtype=float)
     v_pool: wp.array(dtype=wp.vec3)
+    c_start: wp.array(dtype=int)           # where each light's 8-bit codes begin in the code pool
+    c_pool: wp.array(dtype=wp.uint8)       # 8-bit environment maps as stored (see infinite.py)
 
 
 def colour_parameters(name: str, doc: str) -> tuple[Parameter, Parameter]:
@@ -69,6 +73,7 @@ class LightEntry:
     to_light: np.ndarray = field(default_factory=lambda: np.eye(3))
     f_data: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
     v_data: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.float32))
+    c_data: np.ndarray = field(default_factory=lambda: np.zeros(0, np.uint8))
     escapes: bool = False                         # a ray leaving the scene can see it (env map, soft sun)
 
 
@@ -105,9 +110,9 @@ class LightTable:
         L = np.zeros((max(n, 1), 3), np.float32)
         to_world = np.tile(np.eye(3, dtype=np.float32), (max(n, 1), 1, 1))
         to_light = to_world.copy()
-        f_start, v_start = np.zeros(max(n, 1), np.int32), np.zeros(max(n, 1), np.int32)
-        f_pool, v_pool = [np.zeros(1, np.float32)], [np.zeros((1, 3), np.float32)]
-        f_used, v_used = 0, 0
+        f_start, v_start, c_start = (np.zeros(max(n, 1), np.int32) for _ in range(3))
+        f_pool, v_pool, c_pool = [], [], []
+        f_used, v_used, c_used = 0, 0, 0
         for i, (kind, row, e) in enumerate(zip(self.kinds, self.rows, self.entries)):
             f[i] = _placed(e.floats, row.names["floats"], widths["floats"])
             k[i] = _placed(e.ints, row.names["ints"], widths["ints"])
@@ -115,14 +120,16 @@ class LightTable:
                     for x in _placed(e.vecs, row.names["vecs"], widths["vecs"])]
             L[i] = np.asarray(e.L, dtype=np.float32)
             to_world[i], to_light[i] = e.to_world, e.to_light
-            f_start[i], v_start[i] = f_used, v_used
+            f_start[i], v_start[i], c_start[i] = f_used, v_used, c_used
             f_pool.append(np.asarray(e.f_data, np.float32).ravel())
             v_pool.append(np.asarray(e.v_data, np.float32).reshape(-1, 3))
+            c_pool.append(np.asarray(e.c_data, np.uint8).ravel())
             f_used += f_pool[-1].size
             v_used += len(v_pool[-1])
-        # the one-entry stand-ins go last, so every light's data starts at its running offset
-        f_pool.append(f_pool.pop(0))
-        v_pool.append(v_pool.pop(0))
+            c_used += c_pool[-1].size
+        if max(f_used, c_used) >= 2**31:      # device code indexes the pools with 32-bit integers
+            raise RenderError(f"the lights' data ({max(f_used, c_used)} entries) is more than 2^31; "
+                              "use smaller environment images")
         arr = lambda a, dt: wp.array(a, dtype=dt, device=device)
         S = Lights()
         S.count = n
@@ -130,7 +137,10 @@ class LightTable:
         S.L = arr(L, wp.vec3)
         S.f, S.k, S.v = arr(f, float), arr(k, int), arr(v, wp.vec3)
         S.to_world, S.to_light = arr(to_world, wp.mat33), arr(to_light, wp.mat33)
-        S.f_start, S.v_start = arr(f_start, int), arr(v_start, int)
-        S.f_pool, S.v_pool = arr(np.concatenate(f_pool), float), arr(np.concatenate(v_pool), wp.vec3)
-        keep = [S.kind, S.L, S.f, S.k, S.v, S.to_world, S.to_light, S.f_start, S.v_start, S.f_pool, S.v_pool]
+        S.f_start, S.v_start, S.c_start = arr(f_start, int), arr(v_start, int), arr(c_start, int)
+        S.f_pool = pooled(f_pool, np.zeros(1, np.float32), float, device)
+        S.v_pool = pooled(v_pool, np.zeros((1, 3), np.float32), wp.vec3, device)
+        S.c_pool = pooled(c_pool, np.zeros(1, np.uint8), wp.uint8, device)
+        keep = [S.kind, S.L, S.f, S.k, S.v, S.to_world, S.to_light, S.f_start, S.v_start, S.f_pool, S.v_pool,
+                S.c_start, S.c_pool]
         return S, keep

@@ -17,12 +17,15 @@ def cdf_1d(f: np.ndarray) -> tuple[np.ndarray, float]:
     return cdf.astype(np.float32), integral
 
 
-def distribution_2d(f: np.ndarray, row_weight: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float]:
+def distribution_2d(f: np.ndarray, row_weight: np.ndarray | None = None,
+                    out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float]:
     """(conditional CDFs (h, w + 1), marginal CDF (h + 1), integral) for f (times ``row_weight``
     per row, in float64) over [0, 1]², rows along v and columns along u. Rows are weighted one at
-    a time, so a 16k map never needs a float64 copy of itself."""
+    a time, so a 16k map never needs a float64 copy of itself; ``f`` may be anything with a
+    ``shape`` whose ``f[y]`` is row y (an 8-bit map decoded a row at a time), and ``out`` a
+    float32 (h, w + 1) array to write the conditional CDFs into (a view of a light's pool data)."""
     h, w = f.shape
-    cond = np.empty((h, w + 1), dtype=np.float32)
+    cond = np.empty((h, w + 1), dtype=np.float32) if out is None else out
     row_int = np.empty(h)
     for y in range(h):
         row = f[y].astype(np.float64)

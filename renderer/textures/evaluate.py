@@ -1,4 +1,5 @@
-"""Texture evaluation on the device: one table of records and one pool of image pixels. Every
+"""Texture evaluation on the device: one table of records and pools of image texels (float, and
+8-bit codes read through a 256-entry table per image, so 8-bit files stay 8-bit). Every
 material parameter is a texture id, so constants and maps share one path.
 
 A record is either a leaf (constant, image, 2D checkerboard of constants, fbm, wrinkled, windy,
@@ -36,15 +37,18 @@ class Textures:
     mapping: wp.array(dtype=int)        # UV, SPHERICAL, CYLINDRICAL or PLANAR (3D records: the xform alone)
     xform: wp.array(dtype=wp.mat44)     # texture-from-world (planar: rows v1, v2 folded in)
     image: wp.array(dtype=wp.vec4i)     # (pixel offset, width, height, wrap mode)
+    store: wp.array(dtype=wp.vec2i)     # (0: float texels in pixels; 1 or 3: 8-bit codes of that many channels, LUT offset)
     proc: wp.array(dtype=wp.vec4)       # noise (octaves, roughness, scale, variation); select: (pattern, ...)
     prog: wp.array(dtype=wp.vec2i)      # a combination's program: (first entry in program, length)
     program: wp.array(dtype=int)        # record ids in postfix order
     pixels: wp.array(dtype=wp.vec3)
+    codes: wp.array(dtype=wp.uint8)     # 8-bit images as stored, channels interleaved
+    lut: wp.array(dtype=float)          # 256 values per 8-bit image: what each code means, decoded
     perm: wp.array(dtype=int)           # pbrt-v4's noise permutation table
 
 
 @wp.func
-def _texel(T: Textures, img: wp.vec4i, x: int, y: int) -> wp.vec3:
+def _texel(T: Textures, img: wp.vec4i, store: wp.vec2i, x: int, y: int) -> wp.vec3:
     w = img[1]
     h = img[2]
     if img[3] == 0:
@@ -55,11 +59,18 @@ def _texel(T: Textures, img: wp.vec4i, x: int, y: int) -> wp.vec3:
         y = wp.clamp(y, 0, h - 1)
     elif x < 0 or y < 0 or x >= w or y >= h:
         return wp.vec3(0.0)
-    return T.pixels[img[0] + y * w + x]
+    i = y * w + x
+    if store[0] == 0:
+        return T.pixels[img[0] + i]
+    if store[0] == 1:
+        return wp.vec3(T.lut[store[1] + int(T.codes[img[0] + i])])
+    j = img[0] + 3 * i
+    return wp.vec3(T.lut[store[1] + int(T.codes[j])], T.lut[store[1] + int(T.codes[j + 1])],
+                   T.lut[store[1] + int(T.codes[j + 2])])
 
 
 @wp.func
-def _bilinear(T: Textures, img: wp.vec4i, st: wp.vec2) -> wp.vec3:
+def _bilinear(T: Textures, img: wp.vec4i, store: wp.vec2i, st: wp.vec2) -> wp.vec3:
     """Bilinear lookup; t is flipped as in pbrt-v4 so v = 0 is the image's bottom row."""
     x = st[0] * float(img[1]) - 0.5
     y = (1.0 - st[1]) * float(img[2]) - 0.5
@@ -69,8 +80,8 @@ def _bilinear(T: Textures, img: wp.vec4i, st: wp.vec2) -> wp.vec3:
     fy = y - y0
     ix = int(x0)
     iy = int(y0)
-    a = _texel(T, img, ix, iy) * (1.0 - fx) + _texel(T, img, ix + 1, iy) * fx
-    b = _texel(T, img, ix, iy + 1) * (1.0 - fx) + _texel(T, img, ix + 1, iy + 1) * fx
+    a = _texel(T, img, store, ix, iy) * (1.0 - fx) + _texel(T, img, store, ix + 1, iy) * fx
+    b = _texel(T, img, store, ix, iy + 1) * (1.0 - fx) + _texel(T, img, store, ix + 1, iy + 1) * fx
     return a * (1.0 - fy) + b * fy
 
 
@@ -124,7 +135,7 @@ def _plain(T: Textures, tid: int, uv: wp.vec2, p: wp.vec3) -> wp.vec3:
         if (int(wp.floor(st[0])) + int(wp.floor(st[1]))) % 2 == 0:
             return T.scale[tid]
         return T.alt[tid]
-    return wp.cw_mul(T.scale[tid], _bilinear(T, T.image[tid], st))
+    return wp.cw_mul(T.scale[tid], _bilinear(T, T.image[tid], T.store[tid], st))
 
 
 @wp.func

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import warp as wp
 
+from renderer.device.pools import pooled
 from renderer.errors import SceneError
 from renderer.scene.description import TextureDesc, find_texture
 from renderer.scene.texture_params import MAPPINGS, WRAP, read_texture
@@ -34,15 +35,21 @@ class TextureTable:
     xform: list[tuple[float, ...]] = field(default_factory=list)
     image: list[tuple[int, int, int, int]] = field(default_factory=list)
     proc: list[tuple[float, float, float, float]] = field(default_factory=list)
-    pixels: list[np.ndarray] = field(default_factory=list)
+    store: list[tuple[int, int]] = field(default_factory=list)    # (8-bit channels or 0, LUT offset)
+    pixels: list[np.ndarray] = field(default_factory=list)        # float texels, (N, 3) float32 each
     n_pixels: int = 0
+    codes: list[np.ndarray] = field(default_factory=list)         # 8-bit texels, flat uint8 each
+    n_codes: int = 0
+    luts: list[np.ndarray] = field(default_factory=list)          # 256 float32 values per 8-bit image
     named: dict[tuple[str, str], int] = field(default_factory=dict)
-    _image_cache: dict[tuple[Path, str], tuple[int, int, int]] = field(default_factory=dict)
+    _image_cache: dict[tuple, tuple[int, int, int, tuple[int, int]]] = field(default_factory=dict)
 
     def _add(self, kind: int, scale, alt=(0.0, 0.0, 0.0), uvmap=(1.0, 1.0, 0.0, 0.0), image=(0, 1, 1, 0),
              mapping: int = UV, xform: tuple[float, ...] = tuple(np.eye(4).ravel()),
-             inputs: tuple[int, int, int] = (0, 0, 0), proc: tuple[float, ...] = (0.0,) * 4) -> int:
+             inputs: tuple[int, int, int] = (0, 0, 0), proc: tuple[float, ...] = (0.0,) * 4,
+             store: tuple[int, int] = (0, 0)) -> int:
         self.kind.append(kind)
+        self.store.append(store)
         self.proc.append(tuple(float(x) for x in proc))
         self.inputs.append(tuple(int(i) for i in inputs))
         self.mapping.append(int(mapping))
@@ -56,33 +63,63 @@ class TextureTable:
     def add_constant(self, value) -> int:
         return self._add(CONSTANT, value)
 
-    def _load_image(self, path: Path, encoding: str, loc, invert_scale: float | None = None) -> tuple[int, int, int]:
-        """The image's place in the pool; with ``invert_scale`` s, its texels become
-        max(0, 1 - s x texel), pbrt's imagemap "invert" (applied per texel, before interpolation)."""
-        from renderer.io.images import read_image
+    def _load_image(self, path: Path, encoding: str, loc,
+                    invert_scale: float | None = None) -> tuple[int, int, int, tuple[int, int]]:
+        """The image's place: (offset, width, height, store), memoised. An 8-bit file stays 8-bit,
+        one or three channels as the file has them, with a 256-entry table of what each code
+        means; every per-texel step (sRGB or gamma decode, ``invert_scale`` s: pbrt's imagemap
+        "invert", max(0, 1 - s x texel)) is applied to that table, so a texel reads exactly the
+        value a float pool would hold. Other files become float32 RGB texels."""
+        from renderer.io.images import code_values, linear, read_stored
 
         key = (path, encoding, invert_scale)
-        if key not in self._image_cache:
-            try:
-                img = read_image(path, srgb=(encoding.lower() == "srgb"))
-            except Exception as e:  # unreadable or corrupt image: say which file
-                raise SceneError(f"cannot read texture image {path}: {e}", loc) from e
-            if encoding.startswith("gamma "):
-                img = np.power(np.clip(img, 0, None), float(encoding.split()[1]))
-            rgb = np.repeat(img[..., :1], 3, axis=2) if img.shape[2] < 3 else img[..., :3]
-            if not np.all(np.isfinite(rgb)):
-                raise SceneError(f"texture image {path} contains NaN or infinite values", loc)
-            if invert_scale is not None:
-                rgb = np.maximum(0.0, 1.0 - invert_scale * rgb)
-            h, w = rgb.shape[:2]
-            self._image_cache[key] = (self._add_pixels(rgb.reshape(-1, 3)), w, h)
-        return self._image_cache[key]
+        if key in self._image_cache:
+            return self._image_cache[key]
+        srgb = encoding.lower() == "srgb"
+        try:
+            stored = read_stored(path, max_channels=3)
+        except Exception as e:  # unreadable or corrupt image: say which file
+            raise SceneError(f"cannot read texture image {path}: {e}", loc) from e
+        h, w, c = stored.shape
+        eight_bit = stored.dtype == np.uint8
+        values = code_values(srgb) if eight_bit else linear(stored, srgb)
+        if encoding.startswith("gamma "):
+            values = np.power(np.clip(values, 0, None), float(encoding.split()[1]))
+        if not eight_bit:
+            values = np.repeat(values[..., :1], 3, axis=2) if c < 3 else values
+        if not np.all(np.isfinite(values)):
+            raise SceneError(f"texture image {path} contains NaN or infinite values", loc)
+        if invert_scale is not None:
+            values = np.maximum(0.0, 1.0 - invert_scale * values)
+        if eight_bit:
+            channels = 1 if c < 3 else 3
+            codes = stored[..., 0] if channels < c else stored     # a grey+alpha file keeps its grey
+            place = (self._add_codes(codes.ravel()), w, h, (channels, self._add_lut(values)))
+        else:
+            place = (self._add_pixels(values.reshape(-1, 3)), w, h, (0, 0))
+        self._image_cache[key] = place
+        return place
 
     def _add_pixels(self, rgb: np.ndarray) -> int:
-        """Append (N, 3) texels to the pool; their offset."""
+        """Append (N, 3) float texels to the pool; their offset."""
         self.pixels.append(np.ascontiguousarray(rgb, dtype=np.float32))
         self.n_pixels += len(rgb)
         return self.n_pixels - len(rgb)
+
+    def _add_codes(self, codes: np.ndarray) -> int:
+        """Append 8-bit texels (flat, channels interleaved) to the code pool; their offset. Device
+        code indexes the pool with 32-bit integers, so it holds at most 2^31 - 1 bytes."""
+        if self.n_codes + codes.size >= 2**31:
+            raise SceneError(f"8-bit texture images total more than 2^31 bytes ({self.n_codes + codes.size}); "
+                             "use smaller images", None)
+        self.codes.append(np.ascontiguousarray(codes, dtype=np.uint8))
+        self.n_codes += codes.size
+        return self.n_codes - codes.size
+
+    def _add_lut(self, values: np.ndarray) -> int:
+        """Append one 8-bit image's 256 code values; their offset."""
+        self.luts.append(np.ascontiguousarray(values, dtype=np.float32))
+        return 256 * (len(self.luts) - 1)
 
     def add_described(self, desc: TextureDesc, textures: dict[str, TextureDesc]) -> int:
         """Add a named texture from the scene (memoised, so materials sharing it share one record)."""
@@ -93,9 +130,10 @@ class TextureTable:
         if spec.kind == "constant":
             tid = self.add_constant(spec.value)
         elif spec.kind == "imagemap":
-            off, w, h = self._load_image(spec.path, spec.encoding, desc.loc, spec.value if spec.invert else None)
+            off, w, h, store = self._load_image(spec.path, spec.encoding, desc.loc,
+                                                spec.value if spec.invert else None)
             tid = self._add(IMAGE, 1.0 if spec.invert else spec.value, uvmap=spec.uvmap,
-                            image=(off, w, h, WRAP[spec.wrap]), **self._mapped(spec))
+                            image=(off, w, h, WRAP[spec.wrap]), store=store, **self._mapped(spec))
         elif spec.kind == "bilerp":                # a 2x2 image: rows t = 1 (v01, v11), t = 0 (v00, v10)
             v00, v01, v10, v11 = spec.corners
             off = self._add_pixels(np.stack([v01, v11, v00, v10]))
@@ -142,6 +180,7 @@ class TextureTable:
         self.mapping.append(self.mapping[base])
         self.xform.append(self.xform[base])
         self.image.append(self.image[base])
+        self.store.append(self.store[base])
         self.proc.append(self.proc[base])
         return len(self.kind) - 1
 
@@ -170,8 +209,11 @@ class TextureTable:
         T.prog = wp.array(np.asarray(prog, dtype=np.int32), dtype=wp.vec2i, device=device)
         T.program = wp.array(np.asarray([i for q in programs for i in q] or [0], dtype=np.int32), dtype=int,
                              device=device)
-        pix = np.concatenate(self.pixels) if self.pixels else np.zeros((1, 3), np.float32)
-        T.pixels = wp.array(pix, dtype=wp.vec3, device=device)
+        T.store = wp.array(np.asarray(self.store or [(0, 0)], dtype=np.int32), dtype=wp.vec2i, device=device)
+        T.pixels = pooled(self.pixels, np.zeros((1, 3), np.float32), wp.vec3, device)
+        T.codes = pooled(self.codes, np.zeros(1, np.uint8), wp.uint8, device)
+        T.lut = pooled(self.luts, np.zeros(1, np.float32), float, device)
         T.perm = wp.array(permutation(), dtype=int, device=device)
-        return T, [T.kind, T.scale, T.alt, T.inputs, T.uvmap, T.mapping, T.xform, T.image, T.proc, T.prog, T.program,
-                   T.pixels, T.perm]
+        return T, [T.kind, T.scale, T.alt, T.inputs, T.uvmap, T.mapping, T.xform, T.image, T.store, T.proc, T.prog,
+                   T.program, T.pixels, T.codes, T.lut, T.perm]
+

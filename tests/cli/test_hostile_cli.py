@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from PIL import Image
 
 from renderer.cli import EXIT_BAD_INPUT, main
 from renderer.errors import RenderError
@@ -214,8 +215,17 @@ def _exr_claiming(path: Path, width: int, height: int) -> None:
     path.write_bytes(data[:at] + struct.pack("<4i", 0, 0, width - 1, height - 1) + data[at + 16:])
 
 
-def test_an_environment_map_too_big_for_memory_is_named_with_its_line(tmp_path, capsys):
+def test_an_environment_map_header_claiming_80000x40000_is_refused_by_file_and_line(tmp_path, capsys):
     _exr_claiming(tmp_path / "env.exr", 80_000, 40_000)
     p = scene(tmp_path, light='LightSource "infinite" "string filename" "env.exr"')
-    line = refused(capsys, [str(p), "-o", str(tmp_path / "o.exr"), "--quiet"], "GiB limit")
-    assert f"{p}:4:" in line and "env.exr" in line and "80000x40000" in line
+    line = refused(capsys, [str(p), "-o", str(tmp_path / "o.exr"), "--quiet"], "env.exr")
+    assert f"{p}:4:" in line and "header claims" in line
+
+
+def test_an_image_that_takes_the_scene_over_the_memory_limit_is_named_with_its_line(tmp_path, capsys):
+    y, x = np.indices((1024, 2048))
+    Image.fromarray(((x ^ y) & 255).astype(np.uint8)).convert("RGB").save(tmp_path / "env.png")
+    p = scene(tmp_path, light='LightSource "infinite" "string filename" "env.png"')
+    line = refused(capsys, [str(p), "-o", str(tmp_path / "o.exr"), "--quiet", "--memory-limit", "0.3"], "GiB limit")
+    assert f"{p}:4:" in line and "environment image" in line and "env.png" in line and "2048x1024" in line
+    assert not (tmp_path / "o.exr").exists()
