@@ -9,54 +9,20 @@ rendered, 4x3 pixels at 1 spp). ``FUZZ_SEED`` picks another seeded sequence of c
 from __future__ import annotations
 
 import io
-import os
-import resource
 import shutil
-import signal
 import sys
-from contextlib import contextmanager
 from pathlib import Path
-from typing import Iterator
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, seed, settings
+from hypothesis import given, seed
 from hypothesis import strategies as st
 
+from harness import FUZZ, SEED, bounded, load_or_refuse
 from mutations import ROOT, mutated_bytes, mutated_scene, render_flags, seed_scenes
 from renderer.errors import RenderError
 
-EXAMPLES = int(os.environ.get("FUZZ_EXAMPLES", "60"))
-RENDER = os.environ.get("FUZZ_RENDER") == "1"
-SEED = int(os.environ.get("FUZZ_SEED", "0"))
-CASE_SECONDS = 60            # a case running longer than this is a hang
-CASE_MEMORY_MB = 4096        # how far one case may raise the process's peak resident memory
-FUZZ = settings(max_examples=EXAMPLES, deadline=None, database=None, derandomize=False,
-                suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture,
-                                       HealthCheck.data_too_large])
 SEEDS = seed_scenes()
-
-
-class Hang(Exception):
-    """A case ran past CASE_SECONDS."""
-
-
-@contextmanager
-def bounded() -> Iterator[None]:
-    """Fail a case that hangs (SIGALRM) or whose peak memory passes the limit."""
-    def alarm(*_):
-        raise Hang(f"case ran longer than {CASE_SECONDS} s")
-
-    before_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    old = signal.signal(signal.SIGALRM, alarm)
-    signal.alarm(CASE_SECONDS)
-    try:
-        yield
-    finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, old)
-    grown_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024 - before_mb
-    assert grown_mb < CASE_MEMORY_MB, f"the case raised peak memory by {grown_mb:.0f} MB"
 
 
 def stage(folder: Path, tmp: Path) -> Path:
@@ -67,24 +33,6 @@ def stage(folder: Path, tmp: Path) -> Path:
         if not entry.name.endswith(".pbrt"):
             (case / entry.name).symlink_to(entry)
     return case
-
-
-def load_or_refuse(path: Path) -> None:
-    """Valid: loaded and uploaded (and with FUZZ_RENDER, rendered finite). Refused: a RenderError
-    (SceneError and its kinds) that names a file, or an OSError naming the image it could not read.
-    Anything else propagates and fails the case."""
-    from renderer.api import load_scene, render
-    from renderer.device.scene import upload
-
-    try:
-        desc = load_scene(path)
-        upload(desc, "cpu", width=4, height=3)
-    except RenderError as e:
-        assert str(e).strip() and "Traceback" not in str(e)
-        return
-    if RENDER:
-        img = render(desc, spp=1, device="cpu", seed=1, width=4, height=3)
-        assert np.all(np.isfinite(img))
 
 
 @FUZZ
