@@ -80,16 +80,27 @@ def swaps_handedness(m: np.ndarray) -> bool:
 
 
 def inverse(m: np.ndarray, what: str, loc: Location) -> np.ndarray:
-    """The inverse of a transform that must be invertible where ``what`` uses it."""
+    """The inverse of a transform that must be invertible where ``what`` uses it: in float64 and as
+    the device holds it, in float32 (two Scale 1e-45 make a float64 matrix of determinant 1e-90
+    that float32 rounds to zero, which the upload then failed to invert)."""
     if not np.all(np.isfinite(m)):
         raise SceneError(f"{what}: the current transform has infinite or NaN entries", loc)
-    try:
-        inv = np.linalg.inv(m)
-    except np.linalg.LinAlgError:
-        inv = None
-    if inv is None or not np.all(np.isfinite(inv)):
-        raise SceneError(f"{what}: the current transform is singular (a zero Scale or a degenerate matrix)", loc)
-    return inv
+    with np.errstate(all="ignore"):
+        m32 = m.astype(np.float32).astype(np.float64)
+    # beyond float32's range altogether: check_single_precision says so where it matters
+    candidates = (m, m32) if np.all(np.isfinite(m32)) else (m,)
+    invs = []
+    for candidate in candidates:
+        try:
+            with np.errstate(all="ignore"):
+                invs.append(np.linalg.inv(candidate))
+        except np.linalg.LinAlgError:
+            invs.append(None)
+    if any(inv is None or not np.all(np.isfinite(inv)) for inv in invs) or \
+            (len(invs) == 2 and np.abs(invs[1]).max() > np.finfo(np.float32).max):
+        raise SceneError(f"{what}: the current transform is singular (a zero or vanishing Scale, or a degenerate "
+                         "matrix, in the device's single precision)", loc)
+    return invs[0]
 
 
 def transformed_mesh(mesh: MeshDesc, m: np.ndarray) -> MeshDesc:
