@@ -1,5 +1,6 @@
-"""Texture evaluation on the device: one table of records and pools of image texels (float, and
-8-bit codes read through a 256-entry table per image, so 8-bit files stay 8-bit). Every
+"""Texture evaluation on the device: one table of records and pools of image texels (float RGB,
+one float channel, and 8-bit codes read through a 256-entry table per image, so an 8-bit or
+one-channel file is not widened to float RGB). Every
 material parameter is a texture id, so constants and maps share one path.
 
 A record is either a leaf (constant, image, 2D checkerboard of constants, fbm, wrinkled, windy,
@@ -24,6 +25,9 @@ ARITY = {MIX: 3, DIRECTION_MIX: 2, PRODUCT: 2, SELECT: 2}
 #: what a SELECT record's pattern is: a 2D or 3D checkerboard, or pbrt's dots
 CHECKER_2D, CHECKER_3D, DOTS = range(3)
 UV, SPHERICAL, CYLINDRICAL, PLANAR = (MAPPINGS[k] for k in ("uv", "spherical", "cylindrical", "planar"))
+#: How an image record's texels are held (its ``store[0]``): float RGB in ``pixels``, one float
+#: channel in ``values``, or 8-bit codes (1 or 3 channels) in ``codes`` read through 256 values
+RGB_FLOAT, ONE_FLOAT = 0, -1
 Stack = wp.types.matrix(shape=(STACK_DEPTH, 3), dtype=float)
 
 
@@ -37,13 +41,13 @@ class Textures:
     mapping: wp.array(dtype=int)        # UV, SPHERICAL, CYLINDRICAL or PLANAR (3D records: the xform alone)
     xform: wp.array(dtype=wp.mat44)     # texture-from-world (planar: rows v1, v2 folded in)
     image: wp.array(dtype=wp.vec4i)     # (pixel offset, width, height, wrap mode)
-    store: wp.array(dtype=wp.vec2i)     # (0: float texels in pixels; 1 or 3: 8-bit codes of that many channels, LUT offset)
+    store: wp.array(dtype=wp.vec2i)     # (RGB_FLOAT, ONE_FLOAT or 1/3: 8-bit channels; code table offset)
     proc: wp.array(dtype=wp.vec4)       # noise (octaves, roughness, scale, variation); select: (pattern, ...)
     prog: wp.array(dtype=wp.vec2i)      # a combination's program: (first entry in program, length)
     program: wp.array(dtype=int)        # record ids in postfix order
     pixels: wp.array(dtype=wp.vec3)
     codes: wp.array(dtype=wp.uint8)     # 8-bit images as stored, channels interleaved
-    lut: wp.array(dtype=float)          # 256 values per 8-bit image: what each code means, decoded
+    values: wp.array(dtype=float)       # one-channel float images; 256 per 8-bit image: what each code means
     perm: wp.array(dtype=int)           # pbrt-v4's noise permutation table
 
 
@@ -60,13 +64,15 @@ def _texel(T: Textures, img: wp.vec4i, store: wp.vec2i, x: int, y: int) -> wp.ve
     elif x < 0 or y < 0 or x >= w or y >= h:
         return wp.vec3(0.0)
     i = y * w + x
-    if store[0] == 0:
+    if store[0] == RGB_FLOAT:
         return T.pixels[img[0] + i]
+    if store[0] == ONE_FLOAT:
+        return wp.vec3(T.values[img[0] + i])
     if store[0] == 1:
-        return wp.vec3(T.lut[store[1] + int(T.codes[img[0] + i])])
+        return wp.vec3(T.values[store[1] + int(T.codes[img[0] + i])])
     j = img[0] + 3 * i
-    return wp.vec3(T.lut[store[1] + int(T.codes[j])], T.lut[store[1] + int(T.codes[j + 1])],
-                   T.lut[store[1] + int(T.codes[j + 2])])
+    return wp.vec3(T.values[store[1] + int(T.codes[j])], T.values[store[1] + int(T.codes[j + 1])],
+                   T.values[store[1] + int(T.codes[j + 2])])
 
 
 @wp.func

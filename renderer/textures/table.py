@@ -13,7 +13,7 @@ from renderer.device.pools import pooled
 from renderer.errors import SceneError
 from renderer.scene.description import TextureDesc, find_texture
 from renderer.scene.texture_params import MAPPINGS, WRAP, read_texture
-from renderer.textures.evaluate import (ARITY, CHECKER_2D, CHECKER_3D, CHECKERBOARD, CONSTANT, DIRECTION_MIX, DOTS,
+from renderer.textures.evaluate import (ARITY, ONE_FLOAT, RGB_FLOAT, CHECKER_2D, CHECKER_3D, CHECKERBOARD, CONSTANT, DIRECTION_MIX, DOTS,
                                         FBM, IMAGE, MARBLE, MIX, PRODUCT, SELECT, UV, WINDY, WRINKLED,
                                         Textures)
 from renderer.textures.noise import permutation
@@ -35,12 +35,13 @@ class TextureTable:
     xform: list[tuple[float, ...]] = field(default_factory=list)
     image: list[tuple[int, int, int, int]] = field(default_factory=list)
     proc: list[tuple[float, float, float, float]] = field(default_factory=list)
-    store: list[tuple[int, int]] = field(default_factory=list)    # (8-bit channels or 0, LUT offset)
+    store: list[tuple[int, int]] = field(default_factory=list)    # how each record's texels are held (evaluate.py)
     pixels: list[np.ndarray] = field(default_factory=list)        # float texels, (N, 3) float32 each
     n_pixels: int = 0
     codes: list[np.ndarray] = field(default_factory=list)         # 8-bit texels, flat uint8 each
     n_codes: int = 0
-    luts: list[np.ndarray] = field(default_factory=list)          # 256 float32 values per 8-bit image
+    values: list[np.ndarray] = field(default_factory=list)        # 8-bit images' code tables, 1-channel float images
+    n_values: int = 0
     named: dict[tuple[str, str], int] = field(default_factory=dict)
     _image_cache: dict[tuple, tuple[int, int, int, tuple[int, int]]] = field(default_factory=dict)
 
@@ -69,7 +70,8 @@ class TextureTable:
         one or three channels as the file has them, with a 256-entry table of what each code
         means; every per-texel step (sRGB or gamma decode, ``invert_scale`` s: pbrt's imagemap
         "invert", max(0, 1 - s x texel)) is applied to that table, so a texel reads exactly the
-        value a float pool would hold. Other files become float32 RGB texels."""
+        value a float pool would hold. Other files become float32 texels, one channel or three.
+        Every store reads a texel as the same three floats, so renders do not depend on it."""
         from renderer.io.images import code_values, linear, read_stored
 
         key = (path, encoding, invert_scale)
@@ -85,8 +87,8 @@ class TextureTable:
         values = code_values(srgb) if eight_bit else linear(stored, srgb)
         if encoding.startswith("gamma "):
             values = np.power(np.clip(values, 0, None), float(encoding.split()[1]))
-        if not eight_bit:
-            values = np.repeat(values[..., :1], 3, axis=2) if c < 3 else values
+        if not eight_bit and c == 2:                   # grey + alpha: the grey
+            values = values[..., :1]
         if not np.all(np.isfinite(values)):
             raise SceneError(f"texture image {path} contains NaN or infinite values", loc)
         if invert_scale is not None:
@@ -94,9 +96,11 @@ class TextureTable:
         if eight_bit:
             channels = 1 if c < 3 else 3
             codes = stored[..., 0] if channels < c else stored     # a grey+alpha file keeps its grey
-            place = (self._add_codes(codes.ravel()), w, h, (channels, self._add_lut(values)))
+            place = (self._add_codes(codes.ravel()), w, h, (channels, self._add_values(values)))
+        elif values.shape[2] == 1:
+            place = (self._add_values(values.ravel()), w, h, (ONE_FLOAT, 0))
         else:
-            place = (self._add_pixels(values.reshape(-1, 3)), w, h, (0, 0))
+            place = (self._add_pixels(values.reshape(-1, 3)), w, h, (RGB_FLOAT, 0))
         self._image_cache[key] = place
         return place
 
@@ -116,10 +120,15 @@ class TextureTable:
         self.n_codes += codes.size
         return self.n_codes - codes.size
 
-    def _add_lut(self, values: np.ndarray) -> int:
-        """Append one 8-bit image's 256 code values; their offset."""
-        self.luts.append(np.ascontiguousarray(values, dtype=np.float32))
-        return 256 * (len(self.luts) - 1)
+    def _add_values(self, values: np.ndarray) -> int:
+        """Append floats (an 8-bit image's 256 code values, or a one-channel image's texels) to
+        the value pool; their offset (32-bit on the device, as for the code pool)."""
+        if self.n_values + values.size >= 2**31:
+            raise SceneError(f"one-channel texture images total more than 2^31 texels ({self.n_values + values.size}); "
+                             "use smaller images", None)
+        self.values.append(np.ascontiguousarray(values, dtype=np.float32).ravel())
+        self.n_values += values.size
+        return self.n_values - values.size
 
     def add_described(self, desc: TextureDesc, textures: dict[str, TextureDesc]) -> int:
         """Add a named texture from the scene (memoised, so materials sharing it share one record)."""
@@ -212,8 +221,8 @@ class TextureTable:
         T.store = wp.array(np.asarray(self.store or [(0, 0)], dtype=np.int32), dtype=wp.vec2i, device=device)
         T.pixels = pooled(self.pixels, np.zeros((1, 3), np.float32), wp.vec3, device)
         T.codes = pooled(self.codes, np.zeros(1, np.uint8), wp.uint8, device)
-        T.lut = pooled(self.luts, np.zeros(1, np.float32), float, device)
+        T.values = pooled(self.values, np.zeros(1, np.float32), float, device)
         T.perm = wp.array(permutation(), dtype=int, device=device)
         return T, [T.kind, T.scale, T.alt, T.inputs, T.uvmap, T.mapping, T.xform, T.image, T.store, T.proc, T.prog,
-                   T.program, T.pixels, T.codes, T.lut, T.perm]
+                   T.program, T.pixels, T.codes, T.values, T.perm]
 

@@ -62,7 +62,7 @@ def test_a_radiance_hdr_environment_map_renders(tmp_path):
     assert np.all(np.isfinite(img)) and img.mean() > 0.05
 
 
-def test_8bit_files_stay_8bit_one_channel_where_the_file_has_one(tmp_path):
+def test_8bit_files_stay_8bit_and_one_channel_files_one_channel(tmp_path):
     from renderer.scene.description import TextureDesc  # noqa: F401  (the table's own inputs)
     from renderer.textures.table import TextureTable
 
@@ -76,6 +76,26 @@ def test_8bit_files_stay_8bit_one_channel_where_the_file_has_one(tmp_path):
     assert [c.dtype for c in table.codes] == [np.uint8, np.uint8]
     assert sum(c.size for c in table.codes) == 40 * 30 * 4          # three bytes and one byte a texel
     assert table.pixels == [] and table.n_pixels == 0                # no float copy of either
+    write_exr(tmp_path / "height.exr", rng.random((30, 40, 1)).astype(np.float32))
+    _, _, _, float_store = table._load_image(tmp_path / "height.exr", "linear", None)
+    assert float_store[0] == -1 and table.n_values == 2 * 256 + 40 * 30    # one float a texel, not three
+    assert table.pixels == []
+
+
+def test_a_one_channel_float_map_renders_exactly_as_its_three_channel_copy(tmp_path):
+    import renderer
+
+    grey = np.random.default_rng(8).random((20, 30, 1)).astype(np.float32)
+    write_exr(tmp_path / "one.exr", grey)
+    write_exr(tmp_path / "three.exr", np.repeat(grey, 3, axis=2))
+    light = 'LightSource "distant" "point3 from" [0 0 1] "point3 to" [0 0 0] "rgb L" [3 3 3]'
+    images = []
+    for name in ("one", "three"):
+        tex = f'Texture "t" "spectrum" "imagemap" "string filename" "{name}.exr"'
+        (tmp_path / f"{name}.pbrt").write_text(SCENE.format(light=light, texture=tex))
+        images.append(renderer.render(renderer.load_scene(tmp_path / f"{name}.pbrt"), spp=2, seed=4))
+    np.testing.assert_array_equal(images[0], images[1])
+    assert images[0].mean() > 0.01
 
 
 @pytest.mark.parametrize("texture, light", [
