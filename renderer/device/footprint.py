@@ -25,8 +25,9 @@ _BVH_PER_TRIANGLE = 64
 #: object matrices and bounds on the device, and its top-level BVH nodes (measured: about 880
 #: bytes each at 800,000 instances)
 _INSTANCE = 900
-#: a float texture's texel: float32 RGB, held in the decoded image, its RGB copy and the device pool
-_TEXEL = 12 * 3
+#: a float texture's texel, per channel kept (one or three): float32, held in the decoded image,
+#: the linear copy and the device pool
+_TEXEL = 4 * 3
 #: a float environment texel: its RGB plus its CDF entry, held about three times while uploading
 _ENV_TEXEL = 16 * 3
 #: an 8-bit file's texels stay 8-bit (one byte per channel, renderer/io/images.py): held on the
@@ -68,7 +69,7 @@ def _images(desc: SceneDescription) -> list[tuple[str, Path, int, int, int, obje
         if t.kind == "imagemap" and name is not None and name.values:
             path = t.base_dir / str(name.values[0])
             w, h, c, eight_bit = _header(path)
-            per = (1 if c < 3 else 3) * _CODE_BYTE if eight_bit else _TEXEL
+            per = (1 if c < 3 else 3) * (_CODE_BYTE if eight_bit else _TEXEL)
             found.append(("texture image", path, w, h, per, t.loc))
     for light in desc.lights:
         fname = light.values.get("filename") if light.kind == "infinite" else None
