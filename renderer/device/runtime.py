@@ -2,10 +2,6 @@
 that a requested device exists."""
 from __future__ import annotations
 
-import os
-import sys
-import tempfile
-
 from renderer.errors import RenderError
 
 #: What Warp's native code prints on every machine without an NVIDIA driver: expected there, and
@@ -33,36 +29,12 @@ def init_warp(quiet: bool = True) -> None:
 
 
 def _init_without_driver_notice(wp) -> None:
-    """``wp.init()`` with the native library's stderr captured, passing on all but the no-driver line.
+    """``wp.init()`` with the native library's stderr captured, passing on all but the no-driver
+    line; Python's own writes (a signal handler's message) reach the real stderr throughout."""
+    from renderer.io.native_stderr import native_stderr
 
-    Python's own writes keep reaching the real stderr throughout: a signal handler that runs
-    inside ``wp.init()`` (the render command's, which prints and leaves through ``os._exit``)
-    must not have its message swallowed by the capture file."""
-    sys.stderr.flush()
-    saved = os.dup(2)
-    python_stderr = sys.stderr
-    try:
-        python_on_fd2 = python_stderr.fileno() == 2
-    except (AttributeError, OSError, ValueError):   # pytest's capsys and the like: not fd 2
-        python_on_fd2 = False
-    with tempfile.TemporaryFile() as captured, \
-            open(saved, "w", buffering=1, encoding=getattr(python_stderr, "encoding", None) or "utf-8",
-                 errors="backslashreplace", closefd=False) as real_stderr:
-        # sys.stderr is moved before fd 2 and restored after it, so at every instant a Python
-        # write lands on the real stderr
-        if python_on_fd2:
-            sys.stderr = real_stderr
-        os.dup2(captured.fileno(), 2)
-        try:
-            wp.init()
-        finally:
-            os.dup2(saved, 2)
-            sys.stderr = python_stderr
-            captured.seek(0)
-            for line in captured.read().decode(errors="replace").splitlines(keepends=True):
-                if _NO_DRIVER not in line:
-                    sys.stderr.write(line)
-    os.close(saved)
+    with native_stderr(keep=lambda line: _NO_DRIVER not in line):
+        wp.init()
 
 
 def require_device(device: str) -> None:

@@ -78,10 +78,19 @@ def _open(path: Path):
     oiio.attribute("limits:imagesize_MB", 1 << 30)
     config = oiio.ImageSpec()
     config.attribute("oiio:UnassociatedAlpha", 1)   # the stored colour, not premultiplied by alpha
-    reader = oiio.ImageInput.open(str(path), config)
+    with _quiet_decoders():
+        reader = oiio.ImageInput.open(str(path), config)
     if reader is None:
         raise OSError(f"cannot read image {path}: {_one_line(oiio.geterror()) or 'not a readable image'}")
     return reader
+
+
+def _quiet_decoders():
+    """libpng prints its errors to stderr itself ("libpng error: IEND: out of place") beside the
+    same reason in our one-line refusal: its lines are dropped, anything else passes."""
+    from renderer.io.native_stderr import native_stderr
+
+    return native_stderr(keep=lambda line: not line.startswith("libpng "))
 
 
 def _one_line(message: str) -> str:
@@ -143,11 +152,12 @@ def read_stored(path: str | Path, max_channels: int | None = None) -> np.ndarray
         step = band * max(1, _STRIP_BYTES // (w * band * (hi - lo) * out.itemsize))
         for y in range(0, h, step):
             y1 = min(h, y + step)
-            if spec.tile_width:
-                strip = reader.read_tiles(0, 0, spec.x, spec.x + w, spec.y + y, spec.y + y1, spec.z,
-                                          spec.z + max(1, spec.depth), lo, hi, fmt)
-            else:
-                strip = reader.read_scanlines(0, 0, spec.y + y, spec.y + y1, spec.z, lo, hi, fmt)
+            with _quiet_decoders():
+                if spec.tile_width:
+                    strip = reader.read_tiles(0, 0, spec.x, spec.x + w, spec.y + y, spec.y + y1, spec.z,
+                                              spec.z + max(1, spec.depth), lo, hi, fmt)
+                else:
+                    strip = reader.read_scanlines(0, 0, spec.y + y, spec.y + y1, spec.z, lo, hi, fmt)
             if strip is None:
                 raise OSError(f"cannot read image {path}: {_one_line(reader.geterror()) or 'its pixels are unreadable'}")
             strip = strip.reshape(y1 - y, w, hi - lo)

@@ -229,3 +229,19 @@ def test_an_image_that_takes_the_scene_over_the_memory_limit_is_named_with_its_l
     line = refused(capsys, [str(p), "-o", str(tmp_path / "o.exr"), "--quiet", "--memory-limit", "0.3"], "GiB limit")
     assert f"{p}:4:" in line and "environment image" in line and "env.png" in line and "2048x1024" in line
     assert not (tmp_path / "o.exr").exists()
+
+
+def test_a_truncated_png_is_one_line_without_the_decoders_own_output(tmp_path):
+    """libpng prints 'libpng error: ...' on fd 2 itself; the user sees only our located line."""
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return len(data).to_bytes(4, "big") + kind + data + zlib.crc32(kind + data).to_bytes(4, "big")
+
+    ihdr = (4).to_bytes(4, "big") + (2).to_bytes(4, "big") + bytes([8, 2, 0, 0, 0])
+    (tmp_path / "env.png").write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr)
+                                       + chunk(b"IDAT", zlib.compress(b"\0" * 3)))
+    p = scene(tmp_path, light='LightSource "infinite" "string filename" "env.png"')
+    run = subprocess.run([sys.executable, "-m", "renderer", str(p), "-o", str(tmp_path / "o.exr"), "--quiet"],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == EXIT_BAD_INPUT
+    assert len(run.stderr.splitlines()) == 1, run.stderr
+    assert run.stderr.startswith(f"render: error: {p}:4: environment image: cannot read image")
