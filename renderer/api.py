@@ -11,6 +11,7 @@ from renderer.device.footprint import check_fits
 from renderer.device.runtime import init_warp
 from renderer.errors import RenderWarning
 from renderer.io.checkpoint import load_checkpoint
+from renderer.materials import with_multiscatter
 from renderer.scene.description import SceneDescription
 from renderer.session import RenderSession, RenderStats
 from renderer.settings import RenderSettings, settings_for
@@ -48,7 +49,7 @@ def render(scene: SceneDescription, spp: int | None = None, device: str = "cpu",
            nee: bool = True, rr_depth: int | None = None, threads: int | None = None, time_limit: float | None = None,
            progress: Callable[[int, int], None] | None = None, stats: RenderStats | None = None,
            thin_film: str | None = None, sampler: str | None = None,
-           cluster: "Cluster | str | None" = None) -> np.ndarray:
+           cluster: "Cluster | str | None" = None, multiscatter: bool = False) -> np.ndarray:
     """Render and return linear RGB as float32 (H, W, 3). ``spp``, ``seed``, ``max_depth`` and the
     resolution default to the scene file's values. ``progress(done, total)`` runs after every pass.
     ``thin_film``: the thinfilm material's colour mode, ``rgb3``, ``spectral:N`` (default spectral:32)
@@ -56,7 +57,11 @@ def render(scene: SceneDescription, spp: int | None = None, device: str = "cpu",
     ``sampler``: a pbrt-v4 sampler name instead of the scene's (which defaults to ``zsobol``).
     Each of the scene's warnings is issued as a :class:`RenderWarning` (and listed in ``stats.warnings``).
     ``cluster``: render on Ray (a :class:`renderer.cluster.Cluster`, or an address: "local", "auto",
-    "ray://host:port"); the image is bit-identical to the one-process render."""
+    "ray://host:port"); the image is bit-identical to the one-process render.
+    ``multiscatter``: count the bounces between microfacets on every rough ``dielectric``, ``conductor``
+    and ``thinfilm`` (as if each had ``"bool multiscatter" true``; docs/materials.md)."""
+    if multiscatter:
+        scene = with_multiscatter(scene)
     settings = settings_for(scene, seed=seed, width=width, height=height, max_depth=max_depth, nee=nee,
                             rr_depth=rr_depth, thin_film=thin_film, sampler=sampler)
     if cluster is not None:

@@ -121,6 +121,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--thin-film", metavar="MODE", help="thinfilm colour: rgb3 (the seed's 3 wavelengths), "
                    "spectral:N (N jittered wavelengths; default spectral:32) or table[:N] (per-material tables "
                    "over the angle from the 1 nm reference; spectral:N, default 32, for textured coatings)")
+    p.add_argument("--multiscatter", action="store_true", help="rough dielectric, conductor and thinfilm: count the "
+                   "bounces between microfacets on every material (energy compensation; pbrt-v4 files cannot "
+                   "carry the parameter)")
     g = p.add_argument_group("long renders")
     g.add_argument("--time-limit", type=float, metavar="SECONDS", help="stop after the pass that crosses this")
     g.add_argument("--checkpoint", type=Path, metavar="PATH", help="write the accumulation here (atomically)")
@@ -333,6 +336,10 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
             raise RenderError(f"{what} not found: {path}")
     clock0 = time.perf_counter()
     scene = load_scene(args.scene)
+    if args.multiscatter:
+        from renderer.materials import with_multiscatter
+
+        scene = with_multiscatter(scene)
     phases = {"Scene parsing and building": time.perf_counter() - clock0}
     out = args.output or Path(scene.film.filename)
     if out.suffix.lower() not in (".exr", ".png"):

@@ -13,6 +13,7 @@ Registering the module in ``REGISTRY`` is all it takes to add one: parsing, vali
 """
 from __future__ import annotations
 
+import dataclasses
 from types import ModuleType
 from typing import Any
 
@@ -21,10 +22,10 @@ import warp as wp
 
 from renderer.errors import Location, SceneError, UnsupportedError
 from renderer.materials import (coatedconductor, coateddiffuse, conductor, dielectric, diffuse, diffusetransmission, disney,
-                                selection, thindielectric, thinfilm)
+                                energy, selection, thindielectric, thinfilm)
 from renderer.materials.bsdf import FIRST_DERIVED_FLAG, MAX_SLOTS
 from renderer.parameters import Parameter, Parameters, TextureRef
-from renderer.scene.description import MaterialDesc, TextureDesc
+from renderer.scene.description import MaterialDesc, SceneDescription, TextureDesc
 from renderer.scene.params import ParamSet
 from renderer.settings import THIN_FILM_MODE
 from renderer.textures import TextureTable
@@ -153,6 +154,38 @@ def device_layout(desc: MaterialDesc) -> tuple[list[tuple[Parameter, Any]], int]
     return [(params.by_name[n], params.value(values, n)) for n in params.slot_names], flags
 
 
+#: The parameter that turns on energy compensation (renderer.materials.energy) where a material has it.
+MULTISCATTER = "multiscatter"
+
+
+def multiscatters(desc: MaterialDesc) -> bool:
+    """Whether this material counts the bounces between microfacets (its ``multiscatter``, given or default)."""
+    if desc.kind in selection.PARAMS:
+        return False
+    params = module_of(desc.kind, desc.loc).PARAMS
+    return MULTISCATTER in params.by_name and bool(params.value(desc.values, MULTISCATTER))
+
+
+def with_multiscatter(scene: SceneDescription) -> SceneDescription:
+    """The scene with ``multiscatter`` true on every material that has the parameter: what
+    ``--multiscatter`` and ``render(multiscatter=True)`` do, so a pbrt-v4 file (which may not carry
+    the parameter) can use it. The scene's content, and so a checkpoint's fingerprint, records it."""
+    mats = []
+    for d in scene.materials:
+        has = d.kind not in selection.PARAMS and MULTISCATTER in module_of(d.kind, d.loc).PARAMS.by_name
+        mats.append(dataclasses.replace(d, values=d.values | {MULTISCATTER: True}) if has else d)
+    return dataclasses.replace(scene, materials=mats)
+
+
+def first_rows(descs: list[MaterialDesc]) -> list[np.ndarray]:
+    """The layer table's leading rows: the dummy row 0, then the energy tables at
+    ``energy.ENERGY_FIRST`` when a material uses them (else nothing, so other scenes are unchanged)."""
+    rows = [np.zeros((1, 4), np.float32)]
+    if any(multiscatters(d) for d in descs):
+        rows.append(energy.rows())
+    return rows
+
+
 def _texture_id(p: Parameter, v: Any, table: TextureTable, textures: dict[str, TextureDesc], loc) -> int:
     if v is None:
         return -1
@@ -183,7 +216,7 @@ def build_materials(descs: list[MaterialDesc], textures: dict[str, TextureDesc],
     first = np.zeros(n, dtype=np.int32)
     count = np.zeros(n, dtype=np.int32)
     tables = np.zeros(n, dtype=np.int32)
-    rows = [np.zeros((1, 4), np.float32)]
+    rows = first_rows(descs)
     warnings: list[str] = []
     bounds = np.tile(np.array([-FLOAT_MAX, FLOAT_MAX], np.float32), (n, MAX_SLOTS, 1))
     mix = mix_table(descs, table, textures)

@@ -29,13 +29,19 @@ import warp as wp
 from renderer.color.rgb_weights import RgbWeightTable, sampled_white
 from renderer.materials.bsdf import (GLOSSY, REFLECTION, SPECULAR, TRANSMISSION, BSDFEval, BSDFSample, delta_sample,
                                      failed_sample, reflect_z, refract, sampled)
+from renderer.materials.energy import (MEAN_NODES, dielectric_albedo, dielectric_albedo_mean, dielectric_transmit_share,
+                                       effective_alpha, extra_direction, mirror_albedo, mixed_pdf, refraction_albedo)
 from renderer.materials.microfacet import (ggx_D, ggx_G, ggx_sample_visible, ggx_visible_pdf, half_vector,
                                            is_smooth)
 from renderer.optics.angular_table import table_locate, table_value
+from renderer.optics.fresnel import fresnel_dielectric
 from renderer.optics.multilayer import multilayer_rgb3, multilayer_rgb_sampled
 from renderer.optics.thin_film import thin_film_rgb3, thin_film_rgb_sampled
+from renderer.vecmath import INV_PI
 
 BOTH_SIDES = wp.constant(REFLECTION | TRANSMISSION)
+#: How fast the compensation's facet shift moves from δ(μ) to δ̄ with alpha (see _facet_shift).
+FACET_SPREAD = wp.constant(1.0)
 
 
 @wp.struct
@@ -217,3 +223,178 @@ def coating_sample(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, u: wp.ve
     s = sampled(wo, wt, coating_eval(c, eta, alpha, wo, wt, sides, radiance), GLOSSY)
     s.eta = refr[3]
     return s
+
+
+# ---------------------------------------------------------------------------------------------
+# Energy compensation (``multiscatter``) of a clear rough coating, from the tables of :mod:`.energy`.
+# Single scattering loses, per RGB channel, L(μ) = 1 − E_coat(μ). Writing the coating's reflectance
+# as the bare interface's plus a shift, R(θm) ≈ F(θm) + δ with δ = R(μ) − F(μ) taken at the
+# macroscopic angle, and since R + T = 1 for a lossless coating,
+#     E_coat(μ) ≈ E_d(μ) + δ (E_M(μ) − E_0(μ)),
+# E_d the bare dielectric's albedo, E_M the mirror's (Fresnel 1) and E_0 the refraction's (Fresnel 0),
+# all tabulated. The lost energy comes back as Kulla–Conty's lobe built on L instead of 1 − E:
+# reflection (1 − x_A) L_A(μo) L_A(μi) / (π L̄_A), transmission G e_A L_A(μo) L_B(μi) / (π L̄_A L̄_B),
+# x_A = G e_A / L̄_A; L̄ = 2∫L μ dμ is the bare table's mean minus a midpoint rule in μ² over δ; the
+# symmetric G comes from the outside: the bare interface's transmitted share x, re-weighted by the
+# coating's mean R and T over the bare one's, times L̄_out / e (clipped so x ≤ 1 inside). A 0 nm
+# coating (δ = 0) is the bare dielectric's compensation; e = 1 (equal media) is not compensated.
+
+
+@wp.func
+def mean_reflectance(c: Coating) -> wp.vec3:
+    """R̄ = 2∫R(μ) μ dμ per channel from the outside (midpoint rule in μ²): what an opaque rough
+    coating's compensation lobe reflects per bounce (Kulla–Conty's F̄)."""
+    r = wp.vec3(0.0)
+    for j in range(MEAN_NODES):
+        rj, tj = coating_rgb(c, wp.sqrt((float(j) + 0.5) / float(MEAN_NODES)))
+        r += rj
+    return r / float(MEAN_NODES)
+
+
+@wp.func
+def _safe_div(a: wp.vec3, b: wp.vec3) -> wp.vec3:
+    return wp.vec3(wp.where(b[0] > 1.0e-6, a[0] / b[0], 0.0), wp.where(b[1] > 1.0e-6, a[1] / b[1], 0.0),
+                   wp.where(b[2] > 1.0e-6, a[2] / b[2], 0.0))
+
+
+@wp.func
+def _coat_loss(c: Coating, rows: wp.array(dtype=wp.vec4), a: float, e: float, side: float, mu: float,
+               dbar: wp.vec3) -> wp.vec3:
+    """L(μ) per channel for light arriving at cosine mu from the outside (side 1) or the substrate (−1),
+    e the relative index seen from there, dbar the side's mean shift δ̄."""
+    r, t = coating_rgb(c, side * mu)
+    delta = _facet_shift(r - wp.vec3(fresnel_dielectric(mu, e)), dbar, a)
+    k = mirror_albedo(rows, mu, a) - refraction_albedo(rows, mu, a, e)
+    return wp.max(wp.vec3(1.0 - dielectric_albedo(rows, mu, a, e)) - delta * k, wp.vec3(0.0))
+
+
+@wp.func
+def _facet_shift(delta: wp.vec3, dbar: wp.vec3, a: float) -> wp.vec3:
+    """δ seen by the facets: the macroscopic angle's for smooth surfaces, tending to the
+    hemispherical mean δ̄ as alpha → 1, where facets face every direction."""
+    w = wp.min(a * FACET_SPREAD, 1.0)
+    return delta * (1.0 - w) + dbar * w
+
+
+@wp.struct
+class CoatEnergy:
+    """What the compensation lobe of a clear coating needs for one wo (see above)."""
+    e: float          # relative index from wo's side
+    side: float       # 1: wo outside, -1: inside
+    l_o: wp.vec3      # L_A(μo)
+    mean_a: wp.vec3   # L̄_A
+    mean_b: wp.vec3   # L̄_B
+    dbar_a: wp.vec3   # δ̄ from wo's side
+    dbar_b: wp.vec3   # and from the other
+    share: wp.vec3    # G, symmetric
+    p_ms: float       # probability of sampling the lobe
+    p_t: float        # and of transmitting, given the lobe
+
+
+@wp.func
+def coat_energy(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, rows: wp.array(dtype=wp.vec4)) -> CoatEnergy:
+    a = effective_alpha(alpha)
+    q = CoatEnergy()
+    q.side = wp.where(wo[2] > 0.0, 1.0, -1.0)
+    q.e = wp.where(wo[2] > 0.0, eta, 1.0 / eta)
+    # hemispherical means from both sides, the midpoint rule in μ²: δ̄, and δ k without and with δ̄
+    dk_out = wp.vec3(0.0)
+    dk_in = wp.vec3(0.0)
+    db_out = wp.vec3(0.0)
+    db_in = wp.vec3(0.0)
+    k_out = float(0.0)
+    k_in = float(0.0)
+    r_out = wp.vec3(0.0)
+    t_out = wp.vec3(0.0)
+    f_out = float(0.0)
+    for j in range(MEAN_NODES):
+        mu = wp.sqrt((float(j) + 0.5) / float(MEAN_NODES))
+        rj, tj = coating_rgb(c, mu)
+        fj = fresnel_dielectric(mu, eta)
+        kj = mirror_albedo(rows, mu, a) - refraction_albedo(rows, mu, a, eta)
+        dk_out += (rj - wp.vec3(fj)) * kj
+        db_out += rj - wp.vec3(fj)
+        k_out += kj
+        r_out += rj
+        t_out += tj
+        f_out += fj
+        ri, ti = coating_rgb(c, -mu)
+        ki = mirror_albedo(rows, mu, a) - refraction_albedo(rows, mu, a, 1.0 / eta)
+        dk_in += (ri - wp.vec3(fresnel_dielectric(mu, 1.0 / eta))) * ki
+        db_in += ri - wp.vec3(fresnel_dielectric(mu, 1.0 / eta))
+        k_in += ki
+    k = 1.0 / float(MEAN_NODES)
+    db_out = db_out * k
+    db_in = db_in * k
+    l_out = wp.max(wp.vec3(1.0 - dielectric_albedo_mean(rows, a, eta))
+                   - _facet_shift(dk_out * k, db_out * (k_out * k), a), wp.vec3(0.0))
+    l_in = wp.max(wp.vec3(1.0 - dielectric_albedo_mean(rows, a, 1.0 / eta))
+                  - _facet_shift(dk_in * k, db_in * (k_in * k), a), wp.vec3(0.0))
+    q.dbar_a = wp.where(wo[2] > 0.0, db_out, db_in)
+    q.dbar_b = wp.where(wo[2] > 0.0, db_in, db_out)
+    x = dielectric_transmit_share(rows, alpha, eta)
+    refl = r_out * ((1.0 - x) / wp.max(f_out * k, 1.0e-6))
+    tran = t_out * (x / wp.max(1.0 - f_out * k, 1.0e-6))
+    x_out = _safe_div(tran, refl + tran)
+    q.share = wp.min(wp.cw_mul(x_out, l_out) / eta, l_in * eta)
+    q.mean_a = wp.where(wo[2] > 0.0, l_out, l_in)
+    q.mean_b = wp.where(wo[2] > 0.0, l_in, l_out)
+    q.l_o = _coat_loss(c, rows, a, q.e, q.side, wp.abs(wo[2]), q.dbar_a)
+    q.p_ms = wp.clamp(mean3(q.l_o), 0.0, 1.0)
+    if mean3(q.l_o) > 0.0:
+        x_a = wp.min(_safe_div(q.share * q.e, q.mean_a), wp.vec3(1.0))
+        q.p_t = wp.clamp(mean3(wp.cw_mul(x_a, q.l_o)) / mean3(q.l_o), 0.0, 1.0)
+    return q
+
+
+@wp.func
+def coat_multiple(c: Coating, q: CoatEnergy, alpha: wp.vec2, wi: wp.vec3, rows: wp.array(dtype=wp.vec4)) -> wp.vec3:
+    """The compensation lobe at wi (without the cosine and without the 1/e² of radiance)."""
+    a = effective_alpha(alpha)
+    if wi[2] * q.side < 0.0:
+        l_i = _coat_loss(c, rows, a, 1.0 / q.e, -q.side, wp.abs(wi[2]), q.dbar_b)
+        return _safe_div(wp.cw_mul(q.share * (q.e * INV_PI), wp.cw_mul(q.l_o, l_i)), wp.cw_mul(q.mean_a, q.mean_b))
+    l_i = _coat_loss(c, rows, a, q.e, q.side, wp.abs(wi[2]), q.dbar_a)
+    x_a = wp.min(_safe_div(q.share * q.e, q.mean_a), wp.vec3(1.0))
+    return _safe_div(wp.cw_mul(wp.vec3(1.0) - x_a, wp.cw_mul(q.l_o, l_i)) * INV_PI, q.mean_a)
+
+
+@wp.func
+def coating_ms_eval(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3, radiance: bool,
+                    rows: wp.array(dtype=wp.vec4)) -> BSDFEval:
+    """:func:`coating_eval` (both sides) plus the compensation lobe (see above); the density is that
+    of :func:`coating_ms_sample`."""
+    ev = coating_eval(c, eta, alpha, wo, wi, BOTH_SIDES, radiance)
+    if eta == 1.0 or is_smooth(alpha) or wo[2] == 0.0 or wi[2] == 0.0:
+        return ev
+    q = coat_energy(c, eta, alpha, wo, rows)
+    transmit = wo[2] * wi[2] < 0.0
+    f = coat_multiple(c, q, alpha, wi, rows)
+    if transmit and radiance:
+        f = f / (q.e * q.e)
+    ev.f = ev.f + f
+    ev.pdf = mixed_pdf(ev.pdf, q.p_ms, q.p_t, transmit, wi)
+    return ev
+
+
+@wp.func
+def coating_ms_sample(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, u: wp.vec3, radiance: bool,
+                      rows: wp.array(dtype=wp.vec4)) -> BSDFSample:
+    """:func:`coating_sample` (both sides), or with probability mean L(μo) a cosine-distributed
+    reflection or transmission; weighted by :func:`coating_ms_eval`."""
+    if eta == 1.0 or is_smooth(alpha) or wo[2] == 0.0:
+        return coating_sample(c, eta, alpha, wo, u, BOTH_SIDES, radiance)
+    q = coat_energy(c, eta, alpha, wo, rows)
+    d = extra_direction(wo, u, q.p_ms, q.p_t, q.e)
+    wi = wp.vec3(d[0], d[1], d[2])
+    eta_t = d[3]
+    if d[3] < 0.0:
+        s = coating_sample(c, eta, alpha, wo, wp.vec3(u[0], u[1], (u[2] - q.p_ms) / (1.0 - q.p_ms)), BOTH_SIDES,
+                           radiance)
+        if s.pdf <= 0.0:
+            return s
+        wi = s.wi
+        eta_t = s.eta
+    out = sampled(wo, wi, coating_ms_eval(c, eta, alpha, wo, wi, radiance, rows), GLOSSY)
+    out.eta = eta_t
+    return out

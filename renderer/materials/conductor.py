@@ -21,11 +21,14 @@ from renderer.color.spectral import mode_wavelengths
 from renderer.errors import Location
 from renderer.materials.bsdf import (BSDF, FIRST_DERIVED_FLAG, GLOSSY, REFLECTION, SPECULAR, BSDFEval, BSDFSample,
                                      delta_sample, failed_sample, reflect_z, same_hemisphere, sampled, signed_z)
+from renderer.materials.energy import MEAN_NODES, mirror_lost, mirror_multiple
 from renderer.materials.microfacet import (ROUGHNESS_PARAMS, ggx_D, ggx_G, ggx_sample_visible, ggx_visible_pdf,
                                            is_smooth, resolve_roughness, roughness_to_alpha)
 from renderer.optics.angular_table import conductor_table, table_locate, table_value
 from renderer.optics.fresnel import fresnel_conductor
 from renderer.parameters import Parameter, Parameters, TextureRef
+from renderer.sampling.warps import cosine_hemisphere
+from renderer.vecmath import INV_PI
 
 NAME = "conductor"
 
@@ -40,6 +43,8 @@ PARAMS = Parameters(
     *ROUGHNESS_PARAMS,
     Parameter("reflectance", "rgb", None, 0.0, 0.9999, texture=True,
               doc="artist reflectance at normal incidence; replaces eta and k when given"),
+    Parameter("multiscatter", "bool", False, doc="count the bounces between microfacets (energy compensation, "
+              "docs/materials.md); off: pbrt-v4's single scattering"),
 )
 SLOT = PARAMS.slots
 FLAG = PARAMS.flags
@@ -130,14 +135,65 @@ def conductor_sample(eta: wp.vec3, k: wp.vec3, alpha: wp.vec2, wo: wp.vec3, u: w
     """A mirror direction (smooth) or a GGX visible-normal reflection (rough)."""
     if is_smooth(alpha):
         return delta_sample(reflect_z(wo), conductor_fresnel(wo[2], eta, k, rows, table), 1.0, REFLECTION | SPECULAR)
+    wi = reflected(wo, alpha, u, 0.0)
+    if wi[2] == 0.0:
+        return failed_sample()
+    return sampled(wo, wi, conductor_eval(eta, k, alpha, wo, wi, rows, table), GLOSSY)
+
+
+@wp.func
+def reflected(wo: wp.vec3, alpha: wp.vec2, u: wp.vec3, p_cosine: float) -> wp.vec3:
+    """A direction on wo's side (two-sided): cosine distributed when u[2] < p_cosine, else reflected
+    about a GGX visible normal; 0 when that reflection falls below the surface."""
     sgn = wp.where(wo[2] < 0.0, -1.0, 1.0)
     o = signed_z(wo, sgn)
-    wm = ggx_sample_visible(o, alpha, wp.vec2(u[0], u[1]))
-    i = wm * (2.0 * wp.dot(o, wm)) - o
-    if i[2] <= 0.0:
+    i = wp.vec3(0.0)
+    if u[2] < p_cosine:
+        i = cosine_hemisphere(wp.vec2(u[0], u[1]))
+    else:
+        wm = ggx_sample_visible(o, alpha, wp.vec2(u[0], u[1]))
+        i = wm * (2.0 * wp.dot(o, wm)) - o
+        if i[2] <= 0.0:
+            return wp.vec3(0.0)
+    return signed_z(i, sgn)
+
+
+@wp.func
+def fresnel_mean(eta: wp.vec3, k: wp.vec3, rows: wp.array(dtype=wp.vec4), table: int) -> wp.vec3:
+    """F̄ = 2∫F(μ) μ dμ per channel (midpoint rule in μ²): what the compensation lobe reflects per bounce."""
+    acc = wp.vec3(0.0)
+    for j in range(MEAN_NODES):
+        acc += conductor_fresnel(wp.sqrt((float(j) + 0.5) / float(MEAN_NODES)), eta, k, rows, table)
+    return acc / float(MEAN_NODES)
+
+
+@wp.func
+def conductor_ms_eval(eta: wp.vec3, k: wp.vec3, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3,
+                      rows: wp.array(dtype=wp.vec4), table: int) -> BSDFEval:
+    """Single scattering plus Kulla–Conty's lobe (:mod:`.energy`); its density mixes the visible-normal
+    reflection with a cosine lobe chosen with probability 1 − E(μo), as ``conductor_ms_sample`` draws."""
+    ev = conductor_eval(eta, k, alpha, wo, wi, rows, table)
+    if is_smooth(alpha) or not same_hemisphere(wo, wi):
+        return ev
+    mu_o = wp.abs(wo[2])
+    mu_i = wp.abs(wi[2])
+    p_ms = mirror_lost(rows, alpha, mu_o)
+    ev.f = ev.f + mirror_multiple(rows, alpha, mu_o, mu_i, fresnel_mean(eta, k, rows, table))
+    ev.pdf = (1.0 - p_ms) * ev.pdf + p_ms * mu_i * INV_PI
+    return ev
+
+
+@wp.func
+def conductor_ms_sample(eta: wp.vec3, k: wp.vec3, alpha: wp.vec2, wo: wp.vec3, u: wp.vec3,
+                        rows: wp.array(dtype=wp.vec4), table: int) -> BSDFSample:
+    """The visible-normal reflection or, with probability 1 − E(μo), a cosine-distributed direction;
+    weighted by the whole of ``conductor_ms_eval``."""
+    if is_smooth(alpha):
+        return conductor_sample(eta, k, alpha, wo, u, rows, table)
+    wi = reflected(wo, alpha, u, mirror_lost(rows, alpha, wp.abs(wo[2])))
+    if wi[2] == 0.0:
         return failed_sample()
-    wi = signed_z(i, sgn)
-    return sampled(wo, wi, conductor_eval(eta, k, alpha, wo, wi, rows, table), GLOSSY)
+    return sampled(wo, wi, conductor_ms_eval(eta, k, alpha, wo, wi, rows, table), GLOSSY)
 
 
 @wp.func
@@ -154,9 +210,13 @@ def _k(b: BSDF) -> wp.vec3:
 
 @wp.func
 def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+    if (b.flags & FLAG.multiscatter) != 0:
+        return conductor_ms_eval(_eta(b), _k(b), _alpha(b), wo, wi, b.layers, b.table_first)
     return conductor_eval(_eta(b), _k(b), _alpha(b), wo, wi, b.layers, b.table_first)
 
 
 @wp.func
 def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+    if (b.flags & FLAG.multiscatter) != 0:
+        return conductor_ms_sample(_eta(b), _k(b), _alpha(b), wo, u, b.layers, b.table_first)
     return conductor_sample(_eta(b), _k(b), _alpha(b), wo, u, b.layers, b.table_first)

@@ -17,6 +17,8 @@ import warp as wp
 from renderer.errors import Location
 from renderer.materials.bsdf import (BSDF, GLOSSY, REFLECTION, SPECULAR, TRANSMISSION, BSDFEval, BSDFSample,
                                      delta_sample, failed_sample, reflect_z, refract, sampled)
+from renderer.materials.energy import (dielectric_lost, dielectric_multiple, dielectric_transmit_share, extra_direction,
+                                       mixed_pdf)
 from renderer.materials.microfacet import (ROUGHNESS_PARAMS, ggx_D, ggx_G, ggx_sample_visible, ggx_visible_pdf,
                                            half_vector, is_smooth, resolve_roughness, roughness_to_alpha)
 from renderer.optics.dispersion import eta_at, eta_rows, is_dispersive
@@ -27,6 +29,8 @@ NAME = "dielectric"
 PARAMS = Parameters(
     Parameter("eta", "float", 1.5, 1.0e-3, texture=True, doc="index of refraction, inside over outside"),
     *ROUGHNESS_PARAMS,
+    Parameter("multiscatter", "bool", False, doc="count the bounces between microfacets (energy compensation, "
+              "docs/materials.md); off: pbrt-v4's single scattering"),
 )
 SLOT = PARAMS.slots
 FLAG = PARAMS.flags
@@ -155,10 +159,59 @@ def dielectric_sample(eta: float, alpha: wp.vec2, wo: wp.vec3, u: wp.vec3, sides
 
 
 @wp.func
+def dielectric_ms_eval(eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3, radiance: bool,
+                       rows: wp.array(dtype=wp.vec4)) -> BSDFEval:
+    """Both lobes plus the energy-compensation lobe (:mod:`.energy`); the density is that of
+    ``dielectric_ms_sample``: the extra lobe with probability 1 − E(μo), split into reflection and
+    transmission by its own shares, each cosine distributed."""
+    ev = dielectric_eval(eta, alpha, wo, wi, REFLECTION | TRANSMISSION, radiance)
+    if eta == 1.0 or is_smooth(alpha) or wo[2] == 0.0 or wi[2] == 0.0:
+        return ev
+    e = wp.where(wo[2] > 0.0, eta, 1.0 / eta)
+    transmit = wo[2] * wi[2] < 0.0
+    p_ms = dielectric_lost(rows, alpha, e, wp.abs(wo[2]))
+    x = dielectric_transmit_share(rows, alpha, e)
+    f = dielectric_multiple(rows, alpha, e, wp.abs(wo[2]), wp.abs(wi[2]), transmit)
+    if transmit and radiance:
+        f = f / (e * e)
+    ev.f = ev.f + wp.vec3(f)
+    ev.pdf = mixed_pdf(ev.pdf, p_ms, x, transmit, wi)
+    return ev
+
+
+@wp.func
+def dielectric_ms_sample(eta: float, alpha: wp.vec2, wo: wp.vec3, u: wp.vec3, radiance: bool,
+                         rows: wp.array(dtype=wp.vec4)) -> BSDFSample:
+    """``dielectric_sample``, or with probability 1 − E(μo) a cosine-distributed reflection or
+    transmission (u[2] is split between the two choices); weighted by the whole of ``dielectric_ms_eval``."""
+    if eta == 1.0 or is_smooth(alpha) or wo[2] == 0.0:
+        return dielectric_sample(eta, alpha, wo, u, REFLECTION | TRANSMISSION, radiance)
+    e = wp.where(wo[2] > 0.0, eta, 1.0 / eta)
+    p_ms = dielectric_lost(rows, alpha, e, wp.abs(wo[2]))
+    d = extra_direction(wo, u, p_ms, dielectric_transmit_share(rows, alpha, e), e)
+    wi = wp.vec3(d[0], d[1], d[2])
+    eta_t = d[3]
+    if d[3] < 0.0:
+        s = dielectric_sample(eta, alpha, wo, wp.vec3(u[0], u[1], (u[2] - p_ms) / (1.0 - p_ms)),
+                              REFLECTION | TRANSMISSION, radiance)
+        if s.pdf <= 0.0:
+            return s
+        wi = s.wi
+        eta_t = s.eta
+    out = sampled(wo, wi, dielectric_ms_eval(eta, alpha, wo, wi, radiance, rows), GLOSSY)
+    out.eta = eta_t
+    return out
+
+
+@wp.func
 def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+    if (b.flags & FLAG.multiscatter) != 0:
+        return dielectric_ms_eval(b.p[SLOT.eta][0], _alpha(b), wo, wi, True, b.layers)
     return dielectric_eval(b.p[SLOT.eta][0], _alpha(b), wo, wi, REFLECTION | TRANSMISSION, True)
 
 
 @wp.func
 def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+    if (b.flags & FLAG.multiscatter) != 0:
+        return dielectric_ms_sample(b.p[SLOT.eta][0], _alpha(b), wo, u, True, b.layers)
     return dielectric_sample(b.p[SLOT.eta][0], _alpha(b), wo, u, REFLECTION | TRANSMISSION, True)

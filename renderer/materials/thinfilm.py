@@ -42,8 +42,10 @@ from renderer.errors import Location, SceneError
 from renderer.materials.bsdf import (BSDF, DIFFUSE, GLOSSY, REFLECTION, SPECULAR, TRANSMISSION, BSDFEval,
                                      BSDFSample, delta_sample, failed_sample, reflect_z, refract, same_hemisphere,
                                      sampled, signed_z)
-from renderer.materials.coating import (BOTH_SIDES, Coating, coating_eval, coating_rgb, coating_sample,
-                                        glossy_reflection, mean3)
+from renderer.materials.coating import (BOTH_SIDES, Coating, coating_eval, coating_ms_eval,
+                                        coating_ms_sample, coating_rgb, coating_sample, glossy_reflection, mean3,
+                                        mean_reflectance)
+from renderer.materials.energy import mirror_lost, mirror_multiple
 from renderer.materials.coating_table import coating_table
 from renderer.materials.layered import (FILM, LAMBERT, SLAB_PARAMS, Interface, Slab, layered_eval_pdf,
                                         layered_sample, make_slab, walk_flags)
@@ -73,6 +75,8 @@ PARAMS = Parameters(
     *(p for p in SLAB_PARAMS if p.name in ("maxdepth", "nsamples")),
     *STACK_PARAMS,
     *ROUGHNESS_PARAMS,
+    Parameter("multiscatter", "bool", True, doc="rough coatings: count the bounces between microfacets (energy "
+              "compensation coloured by the coating, docs/thinfilm.md)"),
 )
 SLOT = PARAMS.slots
 FLAG = PARAMS.flags
@@ -269,6 +273,11 @@ def _alpha(b: BSDF) -> wp.vec2:
 
 
 @wp.func
+def _multiscatters(b: BSDF) -> bool:
+    return (b.flags & FLAG.multiscatter) != 0
+
+
+@wp.func
 def _eta(b: BSDF) -> float:
     return b.p[SLOT.eta_inner][0] / b.p[SLOT.eta_outer][0]
 
@@ -298,6 +307,11 @@ def _rough_opaque_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3, alpha: wp.vec2) ->
     wm = wp.normalize(o + i)
     r_m, t_m = coating_RT(b, wp.dot(o, wm))
     ev = glossy_reflection(o, i, wm, r_m, alpha)
+    if _multiscatters(b):
+        # Kulla–Conty's lobe with F̄ the coating's mean R: the glossy part then sums to the coating's albedo
+        p_ms = mirror_lost(b.layers, alpha, o[2])
+        ev.f = ev.f + mirror_multiple(b.layers, alpha, o[2], i[2], mean_reflectance(film_coating(b)))
+        ev.pdf = (1.0 - p_ms) * ev.pdf + p_ms * i[2] * INV_PI
     ev.pdf = ev.pdf * p_spec
     if max3(b.p[SLOT.reflectance]) > 0.0:
         r_i, t_i = coating_RT(b, i[2])
@@ -309,7 +323,11 @@ def _rough_opaque_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3, alpha: wp.vec2) ->
 @wp.func
 def _rough_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3, alpha: wp.vec2) -> BSDFEval:
     if _transmissive(b):
-        ev = coating_eval(film_coating(b), _eta(b), alpha, wo, wi, BOTH_SIDES, True)
+        ev = BSDFEval()
+        if _multiscatters(b):
+            ev = coating_ms_eval(film_coating(b), _eta(b), alpha, wo, wi, True, b.layers)
+        else:
+            ev = coating_eval(film_coating(b), _eta(b), alpha, wo, wi, BOTH_SIDES, True)
         ev.f = _tinted(b, ev.f, wo, wi)
         return ev
     return _rough_opaque_eval_pdf(b, wo, wi, alpha)
@@ -320,7 +338,11 @@ def _rough_sample(b: BSDF, wo: wp.vec3, u: wp.vec3, alpha: wp.vec2) -> BSDFSampl
     """A visible microfacet normal, then reflection or refraction by the coating's mean R and T
     there (clear substrate), or the glossy lobe or the substrate by their shares (opaque)."""
     if _transmissive(b):
-        s = coating_sample(film_coating(b), _eta(b), alpha, wo, u, BOTH_SIDES, True)
+        s = BSDFSample()
+        if _multiscatters(b):
+            s = coating_ms_sample(film_coating(b), _eta(b), alpha, wo, u, True, b.layers)
+        else:
+            s = coating_sample(film_coating(b), _eta(b), alpha, wo, u, BOTH_SIDES, True)
         s.weight = _tinted(b, s.weight, wo, s.wi)
         return s
     sgn = wp.where(wo[2] < 0.0, -1.0, 1.0)
@@ -331,11 +353,14 @@ def _rough_sample(b: BSDF, wo: wp.vec3, u: wp.vec3, alpha: wp.vec2) -> BSDFSampl
         return failed_sample()
     lobe = DIFFUSE
     i = cosine_hemisphere(wp.vec2(u[0], u[1]))
-    if u[2] < _specular_share(b, r_o, base):
-        wm = ggx_sample_visible(o, alpha, wp.vec2(u[0], u[1]))
-        i = wm * (2.0 * wp.dot(o, wm)) - o
+    p_spec = _specular_share(b, r_o, base)
+    if u[2] < p_spec:
         lobe = GLOSSY
-        if i[2] <= 0.0:
-            return failed_sample()
+        # the compensation lobe is cosine distributed, like the base: i stays as drawn
+        if not _multiscatters(b) or u[2] >= p_spec * mirror_lost(b.layers, alpha, o[2]):
+            wm = ggx_sample_visible(o, alpha, wp.vec2(u[0], u[1]))
+            i = wm * (2.0 * wp.dot(o, wm)) - o
+            if i[2] <= 0.0:
+                return failed_sample()
     wi = signed_z(i, sgn)
     return sampled(wo, wi, _rough_opaque_eval_pdf(b, wo, wi, alpha), lobe)

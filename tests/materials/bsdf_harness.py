@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 import warp as wp
 
-from renderer.materials import REGISTRY, device_layout, kind_id, material, resolve
+from renderer.materials import REGISTRY, device_layout, first_rows, kind_id, material, resolve
 from renderer.materials.bsdf import BSDF, MAX_SLOTS, SPECULAR, Slots
 from renderer.sampling.warps import uniform_sphere
 
@@ -26,12 +26,14 @@ def constant_rows(name: str, values: dict[str, Any]) -> tuple[np.ndarray, int]:
 
 def layer_table(name: str, values: dict[str, Any]) -> tuple[wp.array, int, int]:
     """The layer table of a scene holding only this material: (rows, first, count), as the upload
-    lays it out (a dummy row 0, then the material's rows; count 0 without a stack)."""
+    lays it out (a dummy row 0, the energy tables if it uses them, then the material's rows;
+    count 0 without a stack)."""
     desc = material(name, **values)
     rows_of = getattr(REGISTRY[name], "layer_rows", None)
     mine = rows_of(resolve(desc)[0], None) if rows_of is not None else np.zeros((0, 4), np.float32)
-    rows = np.concatenate([np.zeros((1, 4), np.float32), mine])
-    return wp.array(rows, dtype=wp.vec4, device="cpu"), 1, len(mine)
+    lead = np.concatenate(first_rows([desc]))
+    rows = np.concatenate([lead, mine])
+    return wp.array(rows, dtype=wp.vec4, device="cpu"), len(lead), len(mine)
 
 
 def _bsdf_inputs(name: str, values: dict[str, Any]) -> list:
@@ -59,8 +61,9 @@ def bsdf_from_rows(p: Slots, flags: int, kind: int, layers: wp.array(dtype=wp.ve
 
 
 @lru_cache(maxsize=None)
-def _kernel(name: str):
+def _kernel(name: str, funcs: tuple | None = None):
     mod = REGISTRY[name]
+    eval_pdf, sample = funcs or (mod.eval_pdf, mod.sample)
 
     @wp.kernel(module="unique")
     def check(p: Slots, flags: int, kind: int, layers: wp.array(dtype=wp.vec4), first: int,
@@ -71,17 +74,17 @@ def _kernel(name: str):
         # uniform-sphere estimates of the integrals of pdf and of f |cos|
         wi = uniform_sphere(wp.vec2(wp.randf(rng), wp.randf(rng)))
         inv = 4.0 * 3.14159265358979
-        e = wp.static(mod.eval_pdf)(b, wo, wi)
+        e = wp.static(eval_pdf)(b, wo, wi)
         out[i, 0] = wp.vec3(e.pdf * inv, 0.0, 0.0)
         out[i, 1] = e.f * (wp.abs(wi[2]) * inv)
-        s = wp.static(mod.sample)(b, wo, wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)))
+        s = wp.static(sample)(b, wo, wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)))
         w = wp.vec3(0.0)
         err = float(0.0)
         if s.pdf > 0.0:
             w = s.weight
             if (s.flags & SPECULAR) == 0:
                 # the sample's pdf and weight must agree with eval_pdf for the direction it picked
-                es = wp.static(mod.eval_pdf)(b, wo, s.wi)
+                es = wp.static(eval_pdf)(b, wo, s.wi)
                 fe = es.f * (wp.abs(s.wi[2]) / s.pdf)
                 err = (wp.abs(es.pdf - s.pdf) / wp.max(s.pdf, 1.0e-6)
                        + wp.length(fe - s.weight) / wp.max(wp.length(s.weight), 1.0e-6))
@@ -91,13 +94,16 @@ def _kernel(name: str):
     return check
 
 
-def bsdf_moments(name: str, values: dict[str, Any], wo, n: int = 400_000, seed: int = 1) -> dict[str, np.ndarray]:
+def bsdf_moments(name: str, values: dict[str, Any], wo, n: int = 400_000, seed: int = 1,
+                 funcs: tuple | None = None) -> dict[str, np.ndarray]:
     """Estimates of ∫pdf, ∫f|cos| (uniform sampling), E[sample weight] (importance sampling),
     its non-delta part, the largest sample/eval_pdf inconsistency (meaningless for materials whose
     f is an estimate) and the lobe flags seen, for a material with the
-    given constant parameter values (defaults for the rest)."""
+    given constant parameter values (defaults for the rest). ``funcs``: an (eval_pdf, sample) pair
+    of Warp functions of (BSDF, wo, wi or u) to check instead of the material's own (e.g. its
+    lobes without the radiance scaling of refraction)."""
     out = wp.zeros((n, 4), dtype=wp.vec3, device="cpu")
-    wp.launch(_kernel(name), dim=n, inputs=[*_bsdf_inputs(name, values), _unit(wo), seed, out], device="cpu")
+    wp.launch(_kernel(name, funcs), dim=n, inputs=[*_bsdf_inputs(name, values), _unit(wo), seed, out], device="cpu")
     o = out.numpy().astype(np.float64)   # float32 sums of 1e5+ weights drift by 1e-3
     ok = o[:, 3, 2] > 0
     nonspec = ok & ((o[:, 3, 1].astype(int) & SPECULAR) == 0)
@@ -253,3 +259,47 @@ def weighted_cells_pvalue(name: str, values: dict[str, Any], wo, n: int = 200_00
     keep &= (a + b) > 1e-3 * (a + b).sum()
     stat = ((a[keep] - b[keep]) ** 2 / (va[keep] + vb[keep])).sum()
     return float(chi2.sf(stat, keep.sum()))
+
+
+@lru_cache(maxsize=None)
+def _f_kernel(name: str):
+    mod = REGISTRY[name]
+
+    @wp.kernel(module="unique")
+    def f(p: Slots, flags: int, kind: int, layers: wp.array(dtype=wp.vec4), first: int, count: int,
+          wo: wp.array(dtype=wp.vec3), wi: wp.array(dtype=wp.vec3), out: wp.array(dtype=wp.vec3)):
+        i = wp.tid()
+        out[i] = wp.static(mod.eval_pdf)(bsdf_from_rows(p, flags, kind, layers, first, count), wo[i], wi[i]).f
+
+    return f
+
+
+def bsdf_values(name: str, values: dict[str, Any], wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
+    """f(wo[i], wi[i]) of a material with constant parameter values, (n, 3)."""
+    out = wp.zeros(len(wo), dtype=wp.vec3, device="cpu")
+    wp.launch(_f_kernel(name), dim=len(wo), inputs=[*_bsdf_inputs(name, values), wp.array(wo, dtype=wp.vec3),
+                                                    wp.array(wi, dtype=wp.vec3), out], device="cpu")
+    return out.numpy()
+
+
+def random_pairs(seed: int, n: int = 4000) -> tuple[np.ndarray, np.ndarray]:
+    """n pairs (wo, wi) of directions uniform on the sphere, float32."""
+    v = np.random.default_rng(seed).standard_normal((2, n, 3))
+    v = (v / np.linalg.norm(v, axis=2, keepdims=True)).astype(np.float32)
+    return v[0], v[1]
+
+
+def assert_reciprocal(name: str, values: dict[str, Any], eta: float, seed: int = 1) -> None:
+    """f(wo, wi) = f(wi, wo) for reflection; with radiance scaled by 1/η'² on refraction,
+    f(wi, wo) = η'² f(wo, wi) for transmission (η' the index ratio seen from wo, eta the inside
+    over the outside index)."""
+    wo, wi = random_pairs(seed)
+    forward = bsdf_values(name, values, wo, wi).astype(np.float64)
+    backward = bsdf_values(name, values, wi, wo).astype(np.float64)
+    crossing = (wo[:, 2] * wi[:, 2] < 0)[:, None]
+    etap = np.where(wo[:, 2] > 0, eta, 1 / eta)[:, None]
+    expect = np.where(crossing, forward * etap ** 2, forward)
+    assert np.any(forward > 0)
+    # atol: float32 half vectors near grazing and near the critical angle (the bare dielectric
+    # misses by as much there); f peaks at O(1)
+    np.testing.assert_allclose(backward, expect, rtol=2e-3, atol=1e-5)

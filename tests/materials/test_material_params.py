@@ -85,7 +85,7 @@ def test_slot_layout_comes_from_the_declaration():
     assert rows[disney.SLOT.roughness, 0] == np.float32(0.2) and rows[disney.SLOT.sheentint, 0] == np.float32(0.5)
     assert flags == disney.FLAG.thin
     rows, flags = constant_rows("thinfilm", dict(transmission=True))
-    assert flags == thinfilm.FLAG.transmission | thinfilm.FLAG.remaproughness
+    assert flags == thinfilm.FLAG.transmission | thinfilm.FLAG.remaproughness | thinfilm.FLAG.multiscatter
     assert rows[thinfilm.SLOT.eta_film, 0] == np.float32(1.55)
 
 
