@@ -198,3 +198,21 @@ def test_exr_colour_channels_are_picked_by_name(tmp_path):
     write_exr(tmp_path / "m.exr", {"albedo.R": 9 * ones, "B": 3 * ones, "G": 2 * ones, "R": ones})
     np.testing.assert_array_equal(read_image(tmp_path / "m.exr")[0, 0], [1, 2, 3])
     assert read_exr(tmp_path / "m.exr")[0]["albedo.R"][0, 0] == 9
+
+
+def test_an_8bit_environment_map_is_held_as_its_codes(tmp_path):
+    """The light's row holds the file's bytes and 256 code values, no float RGB copy."""
+    import renderer
+    from renderer.lights import infinite
+
+    Image.fromarray(np.random.default_rng(10).integers(0, 256, (16, 32, 3), dtype=np.uint8)).save(tmp_path / "e.png")
+    Image.fromarray(np.random.default_rng(11).integers(0, 256, (16, 16), dtype=np.uint8)).save(tmp_path / "g.png")
+    for name, channels in (("e.png", 3), ("g.png", 1)):
+        (tmp_path / "s.pbrt").write_text(SCENE.format(light=f'LightSource "infinite" "string filename" "{name}"',
+                                                      texture='Texture "t" "spectrum" "constant" "rgb value" [1 1 1]'))
+        light = renderer.load_scene(tmp_path / "s.pbrt").lights[0]
+        e = infinite.entry(light, None)
+        h, w = (16, 32) if channels == 3 else (16, 16)
+        assert e.c_data.dtype == np.uint8 and e.c_data.size == h * w * channels and e.ints["channels"] == channels
+        assert len(e.v_data) == 0
+        np.testing.assert_array_equal(e.f_data[e.ints["lut"]:], code_values(True))
