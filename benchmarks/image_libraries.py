@@ -31,7 +31,7 @@ def hwm():
 if reader.startswith("oiio"):
     import OpenImageIO as oiio
     from renderer.io.images import read_stored
-    import renderer.device.footprint   # read_stored's memory check imports it: a render has it already
+    import renderer.device.machine   # read_stored's memory check imports it: a render has it already
 elif reader == "pillow":
     from PIL import Image
     Image.MAX_IMAGE_PIXELS = None

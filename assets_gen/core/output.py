@@ -8,8 +8,9 @@ import json
 import math
 import shutil
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
@@ -94,27 +95,63 @@ def write_ply(path: str | Path, vertices: np.ndarray, faces: np.ndarray, normals
             byte_order="<").write(str(path))
 
 
-def write_preview(path: Path, values: np.ndarray, max_side: int = 512) -> None:
-    """An 8-bit greyscale PNG of a map, stretched to its own range and shrunk to ``max_side``:
-    for looking at, not for rendering (the EXR holds the physical values)."""
+@dataclass(frozen=True)
+class Banded:
+    """A map made a band of rows at a time: ``rows(y0, y1)`` gives rows y0..y1 (float64) of a
+    ``shape`` map, so a 16384-pixel map is written without holding it in float64."""
+    shape: tuple[int, int]
+    rows: Callable[[int, int], np.ndarray]
+
+
+#: Rows per band of a Banded map
+_BAND_ROWS = 256
+
+
+def _preview_step(shape: tuple[int, ...], max_side: int) -> int:
+    return max(1, int(math.ceil(max(shape) / max_side)))
+
+
+def _save_preview(path: Path, sample: np.ndarray, lo: float, hi: float) -> None:
+    """The PNG of the map's every step-th texel, stretched to the map's own [lo, hi]."""
     from PIL import Image
 
-    v = np.asarray(values, dtype=np.float64)
-    lo, hi = float(np.nanmin(v)), float(np.nanmax(v))
-    grey = np.zeros_like(v) if hi <= lo else (v - lo) / (hi - lo)
-    step = max(1, int(math.ceil(max(v.shape) / max_side)))
-    img = (np.nan_to_num(grey[::step, ::step]) * 255.0 + 0.5).astype(np.uint8)
+    grey = np.zeros_like(sample) if hi <= lo else (sample - lo) / (hi - lo)
+    img = (np.nan_to_num(grey) * 255.0 + 0.5).astype(np.uint8)
     Image.fromarray(img).save(path, format="PNG", optimize=False)
 
 
-def write_map(stage: Path, name: str, values: np.ndarray, units: str, preview: bool,
+def write_preview(path: Path, values: np.ndarray, max_side: int = 512) -> None:
+    """An 8-bit greyscale PNG of a map, stretched to its own range and shrunk to ``max_side``:
+    for looking at, not for rendering (the EXR holds the physical values)."""
+    v = np.asarray(values, dtype=np.float64)
+    step = _preview_step(v.shape, max_side)
+    _save_preview(path, v[::step, ::step], float(np.nanmin(v)), float(np.nanmax(v)))
+
+
+def write_map(stage: Path, name: str, values: np.ndarray | Banded, units: str, preview: bool,
               header: dict[str, object] | None = None) -> list[str]:
-    """``name.exr`` (one float channel ``Y`` in ``units``) and optionally ``name.png``."""
+    """``name.exr`` (one float channel ``Y`` in ``units``) and optionally ``name.png``. A
+    :class:`Banded` map gives the same two files, holding only its float32 copy whole."""
     from renderer.io.images import write_exr
 
+    sample = None
+    if isinstance(values, Banded):
+        h, w = values.shape
+        step = _preview_step(values.shape, 512)
+        flat, sampled, lo, hi = np.empty((h, w), np.float32), [], np.inf, -np.inf
+        for y0 in range(0, h, _BAND_ROWS):
+            band = values.rows(y0, min(h, y0 + _BAND_ROWS))
+            flat[y0:y0 + len(band)] = band
+            if band.size and not np.all(np.isnan(band)):
+                lo, hi = min(lo, float(np.nanmin(band))), max(hi, float(np.nanmax(band)))
+            sampled.append(band[(-y0) % step::step, ::step])   # the rows y = 0, step, 2 step, ...
+        sample, values = np.concatenate(sampled), flat
     write_exr(stage / f"{name}.exr", {"Y": np.asarray(values, dtype=np.float32)},
               {"units": units, **(header or {})})
     if not preview:
         return [f"{name}.exr"]
-    write_preview(stage / f"{name}.png", values)
+    if sample is None:
+        write_preview(stage / f"{name}.png", values)
+    else:
+        _save_preview(stage / f"{name}.png", sample, lo, hi)
     return [f"{name}.exr", f"{name}.png"]

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 from scipy import ndimage
 
 from assets_gen.core import Generator, Job, Params, param, reading, require
 from assets_gen.core.noise import smooth_noise
-from assets_gen.core.output import write_map
+from assets_gen.core.output import Banded, write_map
 
 
 @dataclass(frozen=True)
@@ -57,8 +58,11 @@ def mask_radius(mask: np.ndarray) -> np.ndarray:
     return np.where(mask, np.nan_to_num(rho), 1.0)
 
 
-def lens_thickness(p: LensThicknessParams, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """(thickness in nm, lens mask): thickness rises from centre to rim as rho^k; zero outside."""
+def lens_thickness(p: LensThicknessParams, seed: int) -> tuple[Callable[[int, int], np.ndarray], tuple[int, int]]:
+    """(rows, shape): ``rows(y0, y1)`` gives the thickness in nm of map rows y0..y1 (float64),
+    which rises from centre to rim as rho^k and is zero outside the lens. Rows are made a band at
+    a time, each texel exactly as a whole-map computation would, so a 16384-pixel map never holds
+    its float64 intermediates whole (a mask's outline still needs its whole distance transform)."""
     rng = np.random.default_rng(seed)
     if p.mask:
         from PIL import Image
@@ -68,29 +72,42 @@ def lens_thickness(p: LensThicknessParams, seed: int) -> tuple[np.ndarray, np.nd
             raw = np.asarray(im.convert("L"), dtype=np.float64) / 255.0
         scale = p.resolution / max(raw.shape)
         shape = (max(1, round(raw.shape[0] * scale)), max(1, round(raw.shape[1] * scale)))
-        mask = resize(raw, shape, order=1, anti_aliasing=True) > 0.5
-        rho = mask_radius(mask)
+        whole_mask = resize(raw, shape, order=1, anti_aliasing=True) > 0.5
+        whole_rho = mask_radius(whole_mask)
+        radius = lambda y0, y1: (whole_rho[y0:y1], whole_mask[y0:y1])
     else:
         w, h = (p.resolution, max(1, round(p.resolution * p.height_mm / p.width_mm))) \
             if p.width_mm >= p.height_mm else (max(1, round(p.resolution * p.width_mm / p.height_mm)), p.resolution)
         x = (np.arange(w) + 0.5) / w * p.width_mm - p.width_mm / 2
         y = (np.arange(h) + 0.5) / h * p.height_mm - p.height_mm / 2
-        rho = superellipse_radius(x[None, :], y[:, None], p.width_mm / 2, p.height_mm / 2,
-                                  p.superellipse_exponent)
-        mask = rho <= 1.0
-        require(bool(mask.any()), "lens outline covers no pixel; raise --resolution")
-    t = p.center_nm + (p.edge_nm - p.center_nm) * np.clip(rho, 0.0, 1.0) ** p.profile_exponent
-    if p.noise_nm > 0:
-        hh, ww = mask.shape
-        noise = smooth_noise(rng, (0.0, 0.0), (p.height_mm, p.width_mm), p.noise_size_mm)
-        yy, xx = np.indices(mask.shape)
-        t = t + p.noise_nm * noise((yy + 0.5) / hh * p.height_mm, (xx + 0.5) / ww * p.width_mm)
-    return np.where(mask, np.maximum(t, 0.0), 0.0), mask
+        shape = (h, w)
+        # the outline crosses the middle row wherever it covers any pixel (it is convex and centred)
+        inside = superellipse_radius(x, y[np.abs(y).argmin()], p.width_mm / 2, p.height_mm / 2,
+                                     p.superellipse_exponent) <= 1.0
+        require(bool(inside.any()), "lens outline covers no pixel; raise --resolution")
+
+        def radius(y0: int, y1: int) -> tuple[np.ndarray, np.ndarray]:
+            rho = superellipse_radius(x[None, :], y[y0:y1, None], p.width_mm / 2, p.height_mm / 2,
+                                      p.superellipse_exponent)
+            return rho, rho <= 1.0
+    noise = smooth_noise(rng, (0.0, 0.0), (p.height_mm, p.width_mm), p.noise_size_mm) if p.noise_nm > 0 else None
+
+    def rows(y0: int, y1: int) -> np.ndarray:
+        rho, mask = radius(y0, y1)
+        t = p.center_nm + (p.edge_nm - p.center_nm) * np.clip(rho, 0.0, 1.0) ** p.profile_exponent
+        if noise is not None:
+            hh, ww = shape
+            yy, xx = np.indices(mask.shape)
+            t = t + p.noise_nm * noise((yy + y0 + 0.5) / hh * p.height_mm, (xx + 0.5) / ww * p.width_mm)
+        return np.where(mask, np.maximum(t, 0.0), 0.0)
+
+    return rows, shape
 
 
 def write(job: Job) -> list[str]:
     p = job.params
-    return write_map(job.stage, "lens_thickness", lens_thickness(p, job.seed)[0], "nm", job.preview,
+    rows, shape = lens_thickness(p, job.seed)
+    return write_map(job.stage, "lens_thickness", Banded(shape, rows), "nm", job.preview,
                      {"width_mm": p.width_mm, "height_mm": p.height_mm})
 
 

@@ -11,9 +11,9 @@ measured peak (tests check it against real renders), which is enough to tell a 2
 from a 40 GB one."""
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
+from renderer.device.machine import machine_memory
 from renderer.errors import RenderError
 from renderer.scene.description import SceneDescription
 
@@ -38,11 +38,6 @@ _ENV_CDF = 4 * 2
 _PIXEL = 48
 #: what the process itself takes before a scene (Python, numpy, Warp, the kernels)
 _BASE = 300 * 2**20
-
-
-def machine_memory() -> int:
-    """This machine's physical memory in bytes."""
-    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
 
 
 def image_size(path: Path) -> tuple[int, int]:

@@ -138,7 +138,7 @@ def read_stored(path: str | Path, max_channels: int | None = None) -> np.ndarray
                       if base == oiio.UINT16 else (oiio.FLOAT, np.float32))
         w, h, n = spec.width, spec.height, spec.nchannels
         need = w * h * len(chans) * np.dtype(dtype).itemsize
-        from renderer.device.footprint import machine_memory
+        from renderer.device.machine import machine_memory
 
         if w <= 0 or h <= 0 or not chans:
             raise OSError(f"cannot read image {path}: it holds no pixels ({w}x{h}, {n} channels)")
