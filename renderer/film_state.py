@@ -71,7 +71,7 @@ class FilmState:
 def _check_contents(sums: np.ndarray, spp: int, bad: int, rays: float, pixels: int, source: str) -> None:
     """Refuse sums and counts no render of ``spp`` samples per pixel could hold: a whole part below 0
     or above spp x MAX_SAMPLE (NaN written into int64 becomes -2^63), a fraction outside [0, 1),
-    more dropped samples than samples, a negative ray count."""
+    more dropped samples than samples, a ray count below 0 or beyond what the film's int64 counts hold."""
     whole, fraction = sums[..., 0], sums[..., 1]
     most = min(spp * int(MAX_SAMPLE), (1 << 63) - 1)
     if sums.size and (whole.min() < 0 or whole.max() > most):
@@ -82,5 +82,5 @@ def _check_contents(sums: np.ndarray, spp: int, bad: int, rays: float, pixels: i
     if not 0 <= bad <= pixels * spp:
         raise RenderError(f"{source} counts {bad} dropped samples, not within 0..{pixels * spp} "
                           f"({pixels} pixels x {spp} spp); refusing to resume")
-    if not rays >= 0:
+    if not 0 <= rays < 2.0 ** 62:       # the film counts rays in int64
         raise RenderError(f"{source} counts {rays} rays; refusing to resume")

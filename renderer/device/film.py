@@ -10,9 +10,11 @@ same whichever launches, threads or workers formed it. The cut rounds each sampl
 than 2^-62 (2e-19), far below float32's resolution; a sample of :data:`MAX_SAMPLE` or more would
 overflow the whole part over a long render and is dropped and counted like a NaN sample.
 
-The ray and dropped-sample counts are kept per image row: a CPU ``atomic_add`` is a plain
-read-modify-write, so threads launching different rows must never add into one counter; each row
-is written by one launch per pass and the totals are summed on the host."""
+Ray counts are kept per pixel: each pixel is written by one thread per pass, so the count is a
+plain add, with no atomic (on a GPU, an atomic per thread into one counter per row serialised a
+row's threads on one address). Dropped-sample counts are kept per image row (an atomic only when
+a sample is dropped): a CPU ``atomic_add`` is a plain read-modify-write, so threads launching
+different rows must never add into one counter. The totals are summed on the host."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -90,8 +92,8 @@ class Film:
     sample: wp.array = None      # one pass's samples, float64, zero outside a launch
     whole: wp.array = None       # (N, 3) int64
     fraction: wp.array = None    # (N, 3) int64, in units of 2^-FRACTION_BITS
-    bad: wp.array = None
-    rays: wp.array = None
+    bad: wp.array = None         # dropped samples per row
+    rays: wp.array = None        # rays traced per pixel (int64)
     spp: int = 0
 
     def __post_init__(self) -> None:
@@ -100,7 +102,7 @@ class Film:
         self.whole = wp.zeros((n, 3), dtype=wp.int64, device=self.device)
         self.fraction = wp.zeros((n, 3), dtype=wp.int64, device=self.device)
         self.bad = wp.zeros(self.height, dtype=int, device=self.device)
-        self.rays = wp.zeros(self.height, dtype=wp.float64, device=self.device)
+        self.rays = wp.zeros(n, dtype=wp.int64, device=self.device)
 
     def accumulate(self, first_row: int, rows: int) -> None:
         """Add the pass just launched over these rows into the sums."""
@@ -133,12 +135,12 @@ class Film:
     @property
     def ray_count(self) -> float:
         """Rays traced so far (camera, continuation and shadow rays)."""
-        return float(self.rays.numpy().sum())   # whole numbers below 2**53: the sum is exact
+        return float(self.rays.numpy().sum())
 
     def set_counts(self, bad_samples: int, rays: float) -> None:
-        """Restore the totals of a checkpoint (row 0 holds them; the other rows start at zero)."""
+        """Restore the totals of a checkpoint (row and pixel 0 hold them; the others start at zero)."""
         bad = np.zeros(self.height, dtype=np.int32)
-        ray = np.zeros(self.height, dtype=np.float64)
-        bad[0], ray[0] = bad_samples, rays
+        ray = np.zeros(self.width * self.height, dtype=np.int64)
+        bad[0], ray[0] = bad_samples, round(rays)
         self.bad.assign(wp.array(bad, dtype=int, device=self.device))
-        self.rays.assign(wp.array(ray, dtype=wp.float64, device=self.device))
+        self.rays.assign(wp.array(ray, dtype=wp.int64, device=self.device))

@@ -61,7 +61,7 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
     def integrate(scene: Scene, smp: SamplerParams, seed: int, sample_index: int, row_offset: int, max_depth: int,
                   rr_depth: int,
                   film: wp.array(dtype=wp.vec3d), bad_samples: wp.array(dtype=int),
-                  ray_count: wp.array(dtype=wp.float64)):
+                  ray_count: wp.array(dtype=wp.int64)):
         tid = wp.tid()
         width = scene.cam.width
         pixel = row_offset * width + tid
@@ -201,6 +201,6 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
             film[pixel] = film[pixel] + film_value(scene.cam.sensor, L, fs.weight)
         else:
             wp.atomic_add(bad_samples, py, 1)   # per row: no two CPU threads ever add into one counter
-        wp.atomic_add(ray_count, py, wp.float64(n_rays))
+        ray_count[pixel] = ray_count[pixel] + wp.int64(n_rays)   # this thread's pixel alone: no atomic
 
     return integrate
