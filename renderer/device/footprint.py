@@ -34,8 +34,9 @@ _ENV_TEXEL = 16 * 3
 #: host and again on a CUDA device; an 8-bit environment texel adds its float32 CDF entry, twice
 _CODE_BYTE = 2
 _ENV_CDF = 4 * 2
-#: a film pixel: float64 RGB sums plus the float32 image and per-row scratch
-_PIXEL = 48
+#: a film pixel: a pass's float64 RGB scratch (24 B), the fixed-point int64 RGB sums, whole and
+#: fraction (48 B), its int64 ray count (8 B) and the float32 image (12 B)
+_PIXEL = 92
 #: what the process itself takes before a scene (Python, numpy, Warp, the kernels)
 _BASE = 300 * 2**20
 
