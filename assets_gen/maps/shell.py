@@ -6,31 +6,42 @@ height map's seed, size, bands and irregularity has its colour bands on the same
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
 from assets_gen.core import Generator, Job, Params, param, require
 from assets_gen.core.noise import smooth_noise
-from assets_gen.core.output import write_map
+from assets_gen.core.output import Banded, write_map
 
 #: The largest map side, and so the most bands or ridges a map can show.
 MAX_MAP = 16384
 
 
-def banded_phase(t: np.ndarray, count: int, irregularity: float,
-                 rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """(phase in [0, 1) within its band, band index) for positions t in [0, 1] cut into ``count``
-    bands whose widths vary by ``irregularity`` (gamma-distributed, like growth increments that
-    follow the seasons: 0 gives equal bands)."""
+def band_edges(count: int, irregularity: float, rng: np.random.Generator) -> np.ndarray:
+    """The ``count + 1`` edges in [0, 1] of bands whose widths vary by ``irregularity``
+    (gamma-distributed, like growth increments that follow the seasons: 0 gives equal bands)."""
     if irregularity > 0:
         k = 1.0 / irregularity ** 2
         widths = rng.gamma(k, 1.0 / k, size=count)
     else:
         widths = np.ones(count)
-    edges = np.concatenate([[0.0], np.cumsum(widths) / widths.sum()])
+    return np.concatenate([[0.0], np.cumsum(widths) / widths.sum()])
+
+
+def phase_in(t: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(phase in [0, 1) within its band, band index) for positions t in [0, 1]."""
+    count = len(edges) - 1
     idx = np.clip(np.searchsorted(edges, t, side="right") - 1, 0, count - 1)
     phase = (t - edges[idx]) / (edges[idx + 1] - edges[idx])
     return np.clip(phase, 0.0, 1.0 - 1e-12), idx
+
+
+def banded_phase(t: np.ndarray, count: int, irregularity: float,
+                 rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """(phase in [0, 1) within its band, band index) for positions t in [0, 1] cut into ``count``
+    bands whose widths vary by ``irregularity``."""
+    return phase_in(t, band_edges(count, irregularity, rng))
 
 
 @dataclass(frozen=True)
@@ -74,15 +85,26 @@ class ShellBumpParams(ShellMapParams):
         require(self.sharpness >= 1, "sharpness must be at least 1")
 
 
-def _shell_grid(p: ShellMapParams, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """(u, v) texel centres, each coordinate wandered by smooth noise so lines are not ruled."""
+def _shell_wander(p: ShellMapParams, rng: np.random.Generator) -> Callable[[int, int], tuple[np.ndarray, np.ndarray]]:
+    """``grid(y0, y1)``: the (u, v) texel centres of rows y0..y1, each coordinate wandered by smooth
+    noise so lines are not ruled. The noise is drawn here, once; rows are made on demand, each
+    texel as a whole-map grid would have it."""
     u = (np.arange(p.width) + 0.5) / p.width
     v = (np.arange(p.height) + 0.5) / p.height
-    uu, vv = np.meshgrid(u, v)
     wander_u = smooth_noise(rng, (0.0, 0.0), (1.0, 1.0), p.waviness_size)
     wander_v = smooth_noise(rng, (0.0, 0.0), (1.0, 1.0), p.waviness_size)
-    return (np.clip(uu + p.waviness * wander_u(uu, vv), 0, 1),
-            np.clip(vv + p.waviness * wander_v(uu, vv), 0, 1))
+
+    def grid(y0: int, y1: int) -> tuple[np.ndarray, np.ndarray]:
+        uu, vv = np.meshgrid(u, v[y0:y1])
+        return (np.clip(uu + p.waviness * wander_u(uu, vv), 0, 1),
+                np.clip(vv + p.waviness * wander_v(uu, vv), 0, 1))
+
+    return grid
+
+
+def _shell_grid(p: ShellMapParams, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """(u, v) texel centres of the whole map, wandered (see :func:`_shell_wander`)."""
+    return _shell_wander(p, rng)(0, p.height)
 
 
 @dataclass(frozen=True)
@@ -132,23 +154,36 @@ def shell_pigment(p: ShellPigmentParams, seed: int) -> np.ndarray:
     return srgb_to_linear(np.clip(lab2rgb(lab), 0.0, 1.0))
 
 
-def shell_height(p: ShellHeightParams, seed: int) -> np.ndarray:
+def shell_height(p: ShellHeightParams, seed: int) -> Banded:
     """Height (m) of growth bands: the shell swells across each band and thins again at the growth
-    check that ends it; band heights vary like the widths (a good and a poor season)."""
+    check that ends it; band heights vary like the widths (a good and a poor season). Made a band
+    of rows at a time (a 16384-pixel map took 14.8 GB whole), drawing the random numbers in the
+    order :func:`growth_bands` does, so the pigment map with the same seed shares the bands."""
     rng = np.random.default_rng(seed)
-    _, _, phase, idx = growth_bands(p, rng)
+    grid = _shell_wander(p, rng)
+    edges = band_edges(p.bands, p.irregularity, rng)
     amp = p.band_height_mm * 1e-3 * rng.lognormal(0.0, p.irregularity * 0.5, size=p.bands)
-    return amp[idx] * np.sin(np.pi * phase) ** 2
+
+    def rows(y0: int, y1: int) -> np.ndarray:
+        phase, idx = phase_in(grid(y0, y1)[0], edges)
+        return amp[idx] * np.sin(np.pi * phase) ** 2
+
+    return Banded((p.height, p.width), rows)
 
 
-def shell_bump(p: ShellBumpParams, seed: int) -> np.ndarray:
+def shell_bump(p: ShellBumpParams, seed: int) -> Banded:
     """Height (m) of fine regular ridges: |cos|^sharpness peaks, radial (constant v) or concentric
-    (constant u)."""
+    (constant u); made a band of rows at a time."""
     rng = np.random.default_rng(seed)
-    u, v = _shell_grid(p, rng)
-    t = v if p.pattern == "radial" else u
-    phase, _ = banded_phase(t, p.ridges, 0.0, rng)
-    return p.ridge_height_mm * 1e-3 * np.sin(np.pi * phase) ** p.sharpness
+    grid = _shell_wander(p, rng)
+    edges = band_edges(p.ridges, 0.0, rng)
+
+    def rows(y0: int, y1: int) -> np.ndarray:
+        u, v = grid(y0, y1)
+        phase, _ = phase_in(v if p.pattern == "radial" else u, edges)
+        return p.ridge_height_mm * 1e-3 * np.sin(np.pi * phase) ** p.sharpness
+
+    return Banded((p.height, p.width), rows)
 
 
 def write_height(job: Job) -> list[str]:

@@ -34,7 +34,7 @@ def test_pigment_is_deterministic_and_a_reflectance():
 def test_pigment_bands_follow_the_growth_bands():
     """With the height map's seed and bands, the pigment's dark growth-check lines fall where the
     height map's bands meet (height ~ 0); another seed's bands do not line up."""
-    profile = shell.shell_height(shell.ShellHeightParams(**SMALL, waviness=0.0), 7)[0]   # along u
+    profile = shell.shell_height(shell.ShellHeightParams(**SMALL, waviness=0.0), 7).rows(0, 1)[0]   # along u
     edges = (profile <= np.roll(profile, 1)) & (profile <= np.roll(profile, -1))        # band ends
     assert 8 <= edges.sum() <= 14
     ratios = {}
