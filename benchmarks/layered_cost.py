@@ -20,12 +20,12 @@ import warp as wp
 
 from renderer.api import init_warp
 from renderer.color.rgb_weights import RgbWeightTable, make_rgb_weight_table
-from renderer.materials import REGISTRY, device_layout, kind_id, material, resolve
+from renderer.materials import REGISTRY, device_layout, kind_id, material
 from renderer.materials.bsdf import BSDF, MAX_SLOTS, Slots
 from renderer.sampling.warps import uniform_sphere
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "materials"))
-from bsdf_harness import bsdf_from_rows  # noqa: E402
+from bsdf_harness import bsdf_from_rows, layer_table  # noqa: E402
 
 N = 1 << 16
 CASES = [
@@ -47,10 +47,10 @@ for _coat in (FILM, STACK):
 
 
 @wp.func
-def _bsdf(p: Slots, flags: int, kind: int, layers: wp.array(dtype=wp.vec4), count: int, table: RgbWeightTable,
-          n_lambda: int) -> BSDF:
-    """The harness's BSDF (rgb3, layer table from row 1) with the colour-matching table added."""
-    b = bsdf_from_rows(p, flags, kind, layers, 1, count)
+def _bsdf(p: Slots, flags: int, kind: int, layers: wp.array(dtype=wp.vec4), first: int, count: int,
+          table: RgbWeightTable, n_lambda: int) -> BSDF:
+    """The harness's BSDF (rgb3, the harness's layer table) with the colour-matching table added."""
+    b = bsdf_from_rows(p, flags, kind, layers, first, count)
     b.spectral = table
     b.spectral_n = n_lambda
     return b
@@ -61,11 +61,11 @@ def kernels(name: str):
     mod = REGISTRY[name]
 
     @wp.kernel(module="unique")
-    def evaluate(p: Slots, flags: int, kind: int, layers: wp.array(dtype=wp.vec4), count: int,
+    def evaluate(p: Slots, flags: int, kind: int, layers: wp.array(dtype=wp.vec4), first: int, count: int,
                  table: RgbWeightTable, n_lambda: int, out: wp.array(dtype=wp.vec3)):
         i = wp.tid()
         rng = wp.rand_init(7, i)
-        b = _bsdf(p, flags, kind, layers, count, table, n_lambda)
+        b = _bsdf(p, flags, kind, layers, first, count, table, n_lambda)
         b.wavelength_u = wp.randf(rng)
         wo = uniform_sphere(wp.vec2(wp.randf(rng), wp.randf(rng)))
         wi = uniform_sphere(wp.vec2(wp.randf(rng), wp.randf(rng)))
@@ -73,11 +73,11 @@ def kernels(name: str):
         out[i] = e.f * e.pdf
 
     @wp.kernel(module="unique")
-    def draw(p: Slots, flags: int, kind: int, layers: wp.array(dtype=wp.vec4), count: int,
+    def draw(p: Slots, flags: int, kind: int, layers: wp.array(dtype=wp.vec4), first: int, count: int,
              table: RgbWeightTable, n_lambda: int, out: wp.array(dtype=wp.vec3)):
         i = wp.tid()
         rng = wp.rand_init(7, i)
-        b = _bsdf(p, flags, kind, layers, count, table, n_lambda)
+        b = _bsdf(p, flags, kind, layers, first, count, table, n_lambda)
         b.wavelength_u = wp.randf(rng)
         wo = uniform_sphere(wp.vec2(wp.randf(rng), wp.randf(rng)))
         s = wp.static(mod.sample)(b, wp.vec3(wo[0], wo[1], wp.abs(wo[2])),
@@ -96,10 +96,8 @@ def ns_per_call(name: str, values: dict[str, Any], table: RgbWeightTable) -> tup
     for j, (_, v) in enumerate(layout):
         if v is not None:
             rows[j] = np.broadcast_to(np.asarray(v, dtype=np.float32), (3,))
-    rows_of = getattr(REGISTRY[name], "layer_rows", None)
-    mine = rows_of(resolve(desc)[0], None) if rows_of else np.zeros((0, 4), np.float32)
-    layers = wp.array(np.concatenate([np.zeros((1, 4), np.float32), mine]), dtype=wp.vec4, device="cpu")
-    inputs = [Slots(*rows.ravel().tolist()), int(flags), kind_id(name), layers, len(mine), table, n_lambda]
+    layers, first, count = layer_table(name, values)    # the energy tables too, where used
+    inputs = [Slots(*rows.ravel().tolist()), int(flags), kind_id(name), layers, first, count, table, n_lambda]
     out = wp.empty(N, dtype=wp.vec3, device="cpu")
     times = []
     for k in kernels(name):

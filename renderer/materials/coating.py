@@ -364,10 +364,16 @@ def coating_ms_eval(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.
                     rows: wp.array(dtype=wp.vec4)) -> BSDFEval:
     """:func:`coating_eval` (both sides) plus the compensation lobe (see above); the density is that
     of :func:`coating_ms_sample`."""
-    ev = coating_eval(c, eta, alpha, wo, wi, BOTH_SIDES, radiance)
     if eta == 1.0 or is_smooth(alpha) or wo[2] == 0.0 or wi[2] == 0.0:
-        return ev
-    q = coat_energy(c, eta, alpha, wo, rows)
+        return coating_eval(c, eta, alpha, wo, wi, BOTH_SIDES, radiance)
+    return _with_multiple(c, coat_energy(c, eta, alpha, wo, rows), eta, alpha, wo, wi, radiance, rows)
+
+
+@wp.func
+def _with_multiple(c: Coating, q: CoatEnergy, eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3, radiance: bool,
+                   rows: wp.array(dtype=wp.vec4)) -> BSDFEval:
+    """Single scattering plus the lobe, for a wo whose CoatEnergy q is known."""
+    ev = coating_eval(c, eta, alpha, wo, wi, BOTH_SIDES, radiance)
     transmit = wo[2] * wi[2] < 0.0
     f = coat_multiple(c, q, alpha, wi, rows)
     if transmit and radiance:
@@ -381,7 +387,7 @@ def coating_ms_eval(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.
 def coating_ms_sample(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, u: wp.vec3, radiance: bool,
                       rows: wp.array(dtype=wp.vec4)) -> BSDFSample:
     """:func:`coating_sample` (both sides), or with probability mean L(μo) a cosine-distributed
-    reflection or transmission; weighted by :func:`coating_ms_eval`."""
+    reflection or transmission; weighted by :func:`coating_ms_eval` (its wo terms computed once)."""
     if eta == 1.0 or is_smooth(alpha) or wo[2] == 0.0:
         return coating_sample(c, eta, alpha, wo, u, BOTH_SIDES, radiance)
     q = coat_energy(c, eta, alpha, wo, rows)
@@ -395,6 +401,8 @@ def coating_ms_sample(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, u: wp
             return s
         wi = s.wi
         eta_t = s.eta
-    out = sampled(wo, wi, coating_ms_eval(c, eta, alpha, wo, wi, radiance, rows), GLOSSY)
+    if wi[2] == 0.0:
+        return failed_sample()
+    out = sampled(wo, wi, _with_multiple(c, q, eta, alpha, wo, wi, radiance, rows), GLOSSY)
     out.eta = eta_t
     return out

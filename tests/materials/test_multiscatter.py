@@ -14,6 +14,7 @@ import renderer
 from bsdf_harness import assert_reciprocal, bsdf_moments, bsdf_values, chi2_pvalue, random_pairs
 from ms_funcs import FILM_MS, GLASS_MS, GLASS_SS
 from renderer.api import init_warp
+from renderer.cli import build_parser
 from renderer.materials import REGISTRY, material, with_multiscatter
 from scenes_py import single_object_scene
 
@@ -145,6 +146,8 @@ def test_defaults_and_the_scene_wide_switch():
     assert "multiscatter" not in desc.materials[0].values          # the original scene is unchanged
     assert REGISTRY["thinfilm"].PARAMS.value({}, "multiscatter") is True
     assert REGISTRY["dielectric"].PARAMS.value({}, "multiscatter") is False
+    assert build_parser().parse_args(["scene.pbrt", "--multiscatter"]).multiscatter
+    assert not build_parser().parse_args(["scene.pbrt"]).multiscatter
 
 
 def _furnace(m, multiscatter: bool, spp: int) -> np.ndarray:
