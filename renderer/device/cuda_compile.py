@@ -33,8 +33,10 @@ class Budget:
 TARGET = Budget(registers=128, stack_bytes=1024)
 #: What CI holds the representative scene's kernels to today (tests/device): the figures measured
 #: when it was set, so a change that needs more stack or breaks CUDA compilation fails. The
-#: registers are at the hardware's 255 until the path kernel is split (docs/gpu.md).
-BUDGET = Budget(registers=255, stack_bytes=1152)
+#: registers are at the hardware's 255 until the path kernel is split (docs/gpu.md). The frame was
+#: 1,136 B; the multiscatter lobes (846abb8) made it 1,392 B, compiled into every dielectric and
+#: conductor kernel even where no material turns them on, and the budget was raised to that.
+BUDGET = Budget(registers=255, stack_bytes=1408)
 #: Seconds between "still compiling" lines: a GPU user must never wait in silence.
 HEARTBEAT_SECONDS = 15.0
 
