@@ -442,7 +442,7 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
         from renderer.integrators.aov import render_aovs
 
         local = session if args.ray is None else open_session(scene, settings, args.device, args.threads)
-        aovs = render_aovs(local)
+        aovs = render_aovs(local.ds, local.settings.seed)
         layers = {k: aovs[k] for k in args.aov}
         if args.denoise:
             from renderer.io.denoise import denoise

@@ -13,23 +13,19 @@ without extra code; specular-only surfaces report their Fresnel-weighted reflect
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import TYPE_CHECKING
 
 import numpy as np
 import warp as wp
 
 from renderer.camera import generate_ray
 from renderer.device.kernel_options import KERNEL_OPTIONS
-from renderer.device.scene import Features, Scene
+from renderer.device.scene import DeviceScene, Features, Scene
 from renderer.geometry.intersect import surface_at
 from renderer.integrators.shading import load_bsdf, shading_functions
 from renderer.integrators.visibility import ray_queries
 from renderer.materials.selection import choose_material
 from renderer.sampling.frames import to_local
 from renderer.sampling.rng import sample_rng
-
-if TYPE_CHECKING:
-    from renderer.session import RenderSession
 
 AOV_NAMES = ("albedo", "normal", "depth", "material", "instance")
 #: Channel names per AOV in the EXR (layer.channel, as OpenEXR's multi-layer convention).
@@ -99,17 +95,16 @@ def aov_kernel(features: Features) -> wp.Kernel:
     return first_hit
 
 
-def render_aovs(session: RenderSession, n_samples: int = 16) -> dict[str, np.ndarray]:
+def render_aovs(ds: DeviceScene, seed: int, n_samples: int = 16) -> dict[str, np.ndarray]:
     """Albedo (H, W, 3) in [0, 1] (box-filtered over ``n_samples``, 0 for the background), unit
     shading normal (H, W, 3) and camera-space depth (H, W, 1) averaged over the samples that hit
     (both 0 where nothing is hit), and the material and instance ids (H, W, 1) at pixel centres
     (-1: nothing), exact as float32 up to 2^24."""
-    ds = session.ds
-    W, H, dev = ds.width, ds.height, session.device
+    W, H, dev = ds.width, ds.height, ds.device
     out = {"albedo": wp.zeros(W * H, dtype=wp.vec3, device=dev), "normal": wp.zeros(W * H, dtype=wp.vec3, device=dev),
            "depth": wp.zeros(W * H, dtype=float, device=dev), "material": wp.zeros(W * H, dtype=float, device=dev),
            "instance": wp.zeros(W * H, dtype=float, device=dev)}
     wp.launch(aov_kernel(ds.features), dim=W * H,
-              inputs=[ds.struct, session.settings.seed, n_samples, *out.values()],
+              inputs=[ds.struct, seed, n_samples, *out.values()],
               device=dev)
     return {k: v.numpy().reshape(H, W, -1) for k, v in out.items()}

@@ -29,7 +29,8 @@ def test_material_and_instance_ids_label_each_region(tmp_path):
     path = tmp_path / "ids.pbrt"
     path.write_text(SCENE)
     desc = load_scene(path)
-    aov = render_aovs(open_session(desc, settings_for(desc)))
+    settings = settings_for(desc)
+    aov = render_aovs(open_session(desc, settings).ds, settings.seed)
     mat, inst = aov["material"][..., 0], aov["instance"][..., 0]
     kinds = [m.kind for m in desc.materials]
     # pbrt's x axis points left in the image here (the camera looks along +z from -z)
