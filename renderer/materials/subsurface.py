@@ -40,10 +40,15 @@ from renderer.sampling.warps import cosine_hemisphere
 from renderer.vecmath import INV_PI
 
 NAME = "subsurface"
+#: pbrt-v4's default coefficients (mm^-1): whole milk.
+DEFAULT_SIGMA_A = (0.0011, 0.0024, 0.014)
+DEFAULT_SIGMA_S = (2.55, 3.21, 3.77)
 PARAMS = Parameters(
     Parameter("name", "string", None, doc="a measured medium (pbrt-v4's names, below); forces g = 0"),
-    Parameter("sigma_a", "rgb", None, 0.0, texture=True, doc="absorption coefficient per unit length (with sigma_s)"),
-    Parameter("sigma_s", "rgb", None, 0.0, texture=True, doc="scattering coefficient per unit length (with sigma_a)"),
+    Parameter("sigma_a", "rgb", DEFAULT_SIGMA_A, 0.0, texture=True,
+              doc="absorption coefficient per unit length, given with sigma_s (default: whole milk's, in mm^-1)"),
+    Parameter("sigma_s", "rgb", DEFAULT_SIGMA_S, 0.0, texture=True,
+              doc="scattering coefficient per unit length, given with sigma_a (default: whole milk's)"),
     Parameter("reflectance", "rgb", None, 0.0, 1.0, texture=True,
               doc="effective albedo of the body, instead of the coefficients"),
     Parameter("mfp", "rgb", 1.0, 0.0, texture=True, doc="with reflectance: mean free path 1 / sigma_t"),
@@ -59,10 +64,6 @@ FLAG = PARAMS.flags
 FROM_REFLECTANCE = wp.constant(FIRST_DERIVED_FLAG)
 EXIT = wp.constant(FIRST_DERIVED_FLAG << 1)
 SURFACE = wp.constant(FIRST_DERIVED_FLAG << 2)
-
-#: pbrt-v4's default coefficients (mm^-1): whole milk.
-DEFAULT_SIGMA_A = (0.0011, 0.0024, 0.014)
-DEFAULT_SIGMA_S = (2.55, 3.21, 3.77)
 
 #: pbrt-v4's named media: (sigma_s', sigma_a) in mm^-1, RGB. Jensen, Marschner, Levoy and Hanrahan,
 #: "A Practical Model for Subsurface Light Transport" (SIGGRAPH 2001), Table 2; then Narasimhan,
@@ -147,8 +148,7 @@ def resolve(values: dict[str, Any], loc: Location | None) -> tuple[dict[str, Any
     if "reflectance" in values:
         return v, FROM_REFLECTANCE
     refuse_unused(given & {"mfp"}, 'without "reflectance"')
-    v["sigma_a"], v["sigma_s"] = DEFAULT_SIGMA_A, DEFAULT_SIGMA_S
-    return v, 0
+    return v, 0                     # the declared defaults: whole milk
 
 
 def table_rows(values: dict[str, Any], loc: Location | None, thin_film: str) -> tuple[np.ndarray, str]:

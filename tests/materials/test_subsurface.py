@@ -14,6 +14,7 @@ from renderer.api import init_warp
 from renderer.errors import SceneError
 from renderer.materials import beam_diffusion as bd
 from renderer.materials import material
+from renderer.scene.description import MaterialDesc
 from renderer.materials.subsurface import exit_normalisation_host
 from renderer.materials.tabulated_bssrdf import albedo_from_reflectance, profile, sample_radius
 
@@ -162,11 +163,12 @@ def test_refused_as_pbrt_refuses(tmp_path, params, message):
 def test_named_medium_and_defaults():
     """A name gives pbrt-v4's (sigma_s', sigma_a) in mm^-1 (Jensen et al. 2001's skin 1) and forces
     g = 0 in the table; no coefficients give whole milk's."""
-    skin = material("subsurface", name="Skin1", g=0.5)
+    # material()'s own ``name`` keyword names the material, so the parameter goes in directly
+    skin = MaterialDesc("subsurface", {"name": "Skin1", "g": 0.5}, None, "")
     v, _ = renderer.materials.resolve(skin)
     assert v["sigma_s"] == (0.74, 0.88, 1.01) and v["sigma_a"] == (0.032, 0.17, 0.48)
     rows, warning = renderer.materials.subsurface.table_rows(v, None, "rgb3")
     np.testing.assert_array_equal(rows, bd.table_rows(0.0, 1.33))
     assert 'non-zero "g" ignored' in warning
-    v, _ = renderer.materials.resolve(material("subsurface"))
-    assert v["sigma_a"] == (0.0011, 0.0024, 0.014) and v["sigma_s"] == (2.55, 3.21, 3.77)
+    layout = dict((p.name, v) for p, v in renderer.materials.device_layout(material("subsurface"))[0])
+    assert layout["sigma_a"] == (0.0011, 0.0024, 0.014) and layout["sigma_s"] == (2.55, 3.21, 3.77)
