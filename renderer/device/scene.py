@@ -46,7 +46,8 @@ class Features:
     subsurface: bool = False    # a disney material scatters below its surface, or a subsurface material is used
     alpha: bool = False         # some shape has an alpha cut-out or the interface material
     mix: bool = False           # some material is a mix (chosen per hit before shading)
-    dispersion: bool = False    # some dielectric's eta varies with the wavelength (renderer.optics.dispersion)
+    dispersion: bool = False    # some dielectric's eta varies with the wavelength (renderer.optics.dispersion),
+                                # or a subsurface body is spectral: paths may have a negative channel
 
 
 @dataclass
@@ -120,7 +121,9 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     S.shape_flip = wp.array(np.array(flip, np.int32), dtype=int, device=device)
     S.shape_alpha = wp.array(alpha, dtype=int, device=device)
     dispersion = any(m.kind == dielectric.NAME and dielectric.disperses(m.values) for m in desc.materials)
-    S.spectral, S.spectral_n = _spectral_table(thinfilm.NAME in used, dispersion, thin_film, device)
+    # the subsurface material's spectral bodies weigh their wavelengths with the same table
+    spectral_sss = bool(np.any((mats.flags.numpy() & subsurface.SPECTRAL) != 0))
+    S.spectral, S.spectral_n = _spectral_table(thinfilm.NAME in used, dispersion or spectral_sss, thin_film, device)
 
     light_kinds, escaping = kinds_in(lights)
     feats = Features(
@@ -133,7 +136,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
                        for m in desc.materials),
         alpha=bool(np.any(alpha >= 0)),
         mix=any(m.kind == selection.MIX for m in desc.materials),
-        dispersion=dispersion,
+        dispersion=dispersion or spectral_sss,
     )
     keep = [geo, mat_keep, tex_keep, light_keep, cam_keep, S.shape_material, S.shape_light, S.shape_flip,
             S.shape_alpha, S.spectral.w]

@@ -45,6 +45,9 @@ from renderer.materials import subsurface as pbrt_subsurface
 from renderer.materials.bsdf import BSDF
 from renderer.materials.disney import exit_bsdf, subsurface_lobe
 from renderer.vecmath import PI, max3
+from renderer.optics.dispersion import sample_wavelength, wavelength_weight
+from renderer.color.spectral import LAMBDA_MAX_NM, LAMBDA_MIN_NM
+from renderer.materials.beam_diffusion import N_ROWS
 from renderer.materials.tabulated_bssrdf import albedo_from_reflectance, profile, sample_radius
 from renderer.optics.fresnel import fresnel_dielectric
 from renderer.sampling.frames import Frame, frame_from_normal, frame_from_tangent, to_local
@@ -234,36 +237,73 @@ def subsurface_scatter(scene: Scene, b: BSDF, s: Surface, inst: int, wo: wp.vec3
 PROBE_QUANTILE = wp.constant(0.999)
 TABULATED_SALT = wp.constant(wp.uint32(0x27D4EB2F))
 SSS_SLOT = pbrt_subsurface.SLOT
+#: The spectral body's coefficient rows follow the profile table.
+PROFILE_ROWS = wp.constant(N_ROWS)
+LAMBDA_MIN = wp.constant(LAMBDA_MIN_NM)
+LAMBDA_MAX = wp.constant(LAMBDA_MAX_NM)
 
 
 @wp.struct
 class Medium:
-    """The body's albedo and extinction per channel at the entry point, and its table."""
+    """The body at the entry point, per channel: an RGB channel, or with SPECTRAL one of three
+    wavelengths (pbrt-v4's visible-wavelength density, stratified in thirds of its CDF, jittered
+    together, as pbrt-v4 spreads its four); ``to_rgb`` turns the three channels' values into RGB
+    (identity, or each wavelength's CIE 1931/D65 to sRGB weight over three times its density: an
+    unbiased estimate of the spectrum's RGB, which may be negative in a channel)."""
 
     rho: wp.vec3
     sigma_t: wp.vec3
     r_max: wp.vec3          # per channel the probe radius (0: the channel cannot be sampled)
+    to_rgb: wp.mat33
 
 
 @wp.func
-def _body(b: BSDF) -> Medium:
+def _spectrum(row: wp.vec4, lam: float) -> float:
+    """A sigmoid-quadratic spectrum (renderer.color.rgb_spectrum) at λ: scale row[3], coefficients row[0:3]."""
+    t = (lam - LAMBDA_MIN) / (LAMBDA_MAX - LAMBDA_MIN)
+    x = row[0] * t * t + row[1] * t + row[2]
+    return row[3] * (0.5 + x / (2.0 * wp.sqrt(1.0 + x * x)))
+
+
+@wp.func
+def _body(b: BSDF, u_lambda: float) -> Medium:
     """sigma_s / sigma_t and sigma_t from the coefficients times scale, or from reflectance and mfp
-    (the albedo whose effective albedo is the reflectance, sigma_t = 1 / (scale mfp))."""
+    (the albedo whose effective albedo is the reflectance, sigma_t = 1 / (scale mfp)), per channel."""
     m = Medium()
+    m.to_rgb = wp.identity(n=3, dtype=float)
     scale = b.p[SSS_SLOT.scale][0]
     rows = b.layers
     first = b.table_first
+    from_reflectance = (b.flags & pbrt_subsurface.FROM_REFLECTANCE) != 0
+    spectral = (b.flags & pbrt_subsurface.SPECTRAL) != 0
     for c in range(3):
+        x = float(0.0)       # sigma_a, or the reflectance
+        y = float(0.0)       # sigma_s, or the mean free path
+        if spectral:
+            hs = sample_wavelength((float(c) + u_lambda) / 3.0)
+            lam = hs[0]
+            x = _spectrum(rows[first + PROFILE_ROWS], lam)
+            y = _spectrum(rows[first + PROFILE_ROWS + 1], lam)
+            w = wavelength_weight(b.spectral, hs) / 3.0
+            m.to_rgb[0, c] = w[0]
+            m.to_rgb[1, c] = w[1]
+            m.to_rgb[2, c] = w[2]
+        elif from_reflectance:
+            x = b.p[SSS_SLOT.reflectance][c]
+            y = b.p[SSS_SLOT.mfp][c]
+        else:
+            x = b.p[SSS_SLOT.sigma_a][c]
+            y = b.p[SSS_SLOT.sigma_s][c]
         rho = float(0.0)
         st = float(0.0)
-        if (b.flags & pbrt_subsurface.FROM_REFLECTANCE) != 0:
-            mfp = scale * b.p[SSS_SLOT.mfp][c]
+        if from_reflectance:
+            mfp = scale * y
             if mfp > 0.0:
                 st = 1.0 / mfp
-                rho = albedo_from_reflectance(rows, first, b.p[SSS_SLOT.reflectance][c])
+                rho = albedo_from_reflectance(rows, first, x)
         else:
-            sa = wp.max(scale * b.p[SSS_SLOT.sigma_a][c], 0.0)
-            ss = wp.max(scale * b.p[SSS_SLOT.sigma_s][c], 0.0)
+            sa = wp.max(scale * x, 0.0)
+            ss = wp.max(scale * y, 0.0)
             st = sa + ss
             if st > 0.0:
                 rho = ss / st
@@ -334,7 +374,7 @@ def tabulated_scatter(scene: Scene, b: BSDF, s: Surface, inst: int, wo: wp.vec3,
     if t.pdf <= 0.0:
         ev.weight = wp.vec3(0.0)
         return ev
-    m = _body(b)
+    m = _body(b, wp.randf(rng))
     ch = wp.min(int(wp.randf(rng) * 3.0), 2)
     u_axis = wp.randf(rng)
     u_r = wp.randf(rng)
@@ -365,7 +405,7 @@ def tabulated_scatter(scene: Scene, b: BSDF, s: Surface, inst: int, wo: wp.vec3,
     sp = wp.vec3(profile(b.layers, b.table_first, m.rho[0], m.sigma_t[0], dist)[0],
                  profile(b.layers, b.table_first, m.rho[1], m.sigma_t[1], dist)[0],
                  profile(b.layers, b.table_first, m.rho[2], m.sigma_t[2], dist)[0])
-    ev.weight = sp * (t.weight[0] * float(probe.found) / (q * pdf))
+    ev.weight = m.to_rgb * sp * (t.weight[0] * float(probe.found) / (q * pdf))
     ev.s = si
     ev.b.flags = b.flags | pbrt_subsurface.EXIT
     ev.wo = si.ns

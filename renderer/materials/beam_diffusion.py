@@ -217,6 +217,8 @@ OFF_PROFILE = OFF_EFF + N_RHO
 OFF_CDF = OFF_PROFILE + N_RHO * N_RADIUS
 OFF_INVERSE = OFF_CDF + N_RHO * N_RADIUS
 N_FLOATS = OFF_INVERSE + N_INVERSE
+#: Rows of the table in the layer table (the header, then the floats four to a row).
+N_ROWS = 1 + (N_FLOATS + 3) // 4
 
 
 def table_rows(g: float, eta: float) -> np.ndarray:
@@ -228,4 +230,6 @@ def table_rows(g: float, eta: float) -> np.ndarray:
     pad = (-flat.size) % 4
     body = np.concatenate([flat, np.zeros(pad)]).reshape(-1, 4)
     header = np.array([[N_FLOATS, t.rho_eff[-1], 0.0, 0.0]])
-    return np.concatenate([header, body]).astype(np.float32)
+    rows = np.concatenate([header, body]).astype(np.float32)
+    assert len(rows) == N_ROWS
+    return rows

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 import warp as wp
 
+from renderer.color import rgb_spectrum
 from renderer.errors import Location, SceneError, UnsupportedError
 from renderer.materials.beam_diffusion import fresnel_moment1, table_rows as profile_rows
 from renderer.materials.bsdf import (BSDF, DIFFUSE, FIRST_DERIVED_FLAG, REFLECTION, TRANSMISSION, BSDFEval,
@@ -35,7 +36,7 @@ from renderer.materials.bsdf import (BSDF, DIFFUSE, FIRST_DERIVED_FLAG, REFLECTI
 from renderer.materials.dielectric import dielectric_eval, dielectric_sample
 from renderer.materials.microfacet import ROUGHNESS_PARAMS, resolve_roughness, roughness_to_alpha
 from renderer.optics.fresnel import fresnel_dielectric
-from renderer.parameters import Parameter, Parameters
+from renderer.parameters import Parameter, Parameters, TextureRef
 from renderer.sampling.warps import cosine_hemisphere
 from renderer.vecmath import INV_PI
 
@@ -64,6 +65,8 @@ FLAG = PARAMS.flags
 FROM_REFLECTANCE = wp.constant(FIRST_DERIVED_FLAG)
 EXIT = wp.constant(FIRST_DERIVED_FLAG << 1)
 SURFACE = wp.constant(FIRST_DERIVED_FLAG << 2)
+#: The body's coefficients are constant colours: the step evaluates them per wavelength (``spectra``).
+SPECTRAL = wp.constant(FIRST_DERIVED_FLAG << 3)
 
 #: pbrt-v4's named media: (sigma_s', sigma_a) in mm^-1, RGB. Jensen, Marschner, Levoy and Hanrahan,
 #: "A Practical Model for Subsurface Light Transport" (SIGGRAPH 2001), Table 2; then Narasimhan,
@@ -138,17 +141,46 @@ def resolve(values: dict[str, Any], loc: Location | None) -> tuple[dict[str, Any
                                    f'{", ".join(NAMED_MEDIA)})', loc)
         refuse_unused(given, 'with "name"')
         v["sigma_s"], v["sigma_a"] = medium     # g is taken as 0 by table_rows
-        return v, 0
+        return v, _spectral_flag(v, 0)
     if ("sigma_a" in values) != ("sigma_s" in values):
         have, missing = ("sigma_a", "sigma_s") if "sigma_a" in values else ("sigma_s", "sigma_a")
         raise SceneError(f'{owner}: "{have}" given without "{missing}"', loc)
     if "sigma_a" in values:
         refuse_unused(given & {"reflectance", "mfp"}, 'with "sigma_a" and "sigma_s"')
-        return v, 0
+        return v, _spectral_flag(v, 0)
     if "reflectance" in values:
-        return v, FROM_REFLECTANCE
+        return v, _spectral_flag(v, FROM_REFLECTANCE)
     refuse_unused(given & {"mfp"}, 'without "reflectance"')
-    return v, 0                     # the declared defaults: whole milk
+    return v, _spectral_flag(v, 0)  # the declared defaults: whole milk
+
+
+def _spectral_inputs(values: dict[str, Any], flags: int) -> tuple[str, str]:
+    """The two colour parameters the body is made of in this mode."""
+    return ("reflectance", "mfp") if flags & FROM_REFLECTANCE else ("sigma_a", "sigma_s")
+
+
+def _spectra(values: dict[str, Any], flags: int) -> np.ndarray | None:
+    """(2, 4) rows (c0, c1, c2, scale) of the body's two colours as pbrt-v4 upsamples them
+    (reflectance as an albedo spectrum, the rest unbounded), or None where they are textures,
+    grey (a constant spectrum: RGB is exact) or not representable."""
+    names = _spectral_inputs(values, flags)
+    rgb = [PARAMS.value(values, n) for n in names]
+    if any(isinstance(v, TextureRef) for v in rgb):
+        return None
+    rgb = [np.broadcast_to(np.asarray(v, np.float64), (3,)) for v in rgb]
+    if all(np.ptp(v) <= 1e-6 * max(float(np.max(v)), 1e-30) for v in rgb):
+        return None
+    rows = []
+    for name, v in zip(names, rgb):
+        c, scale, miss = rgb_spectrum.albedo(v) if name == "reflectance" else rgb_spectrum.unbounded(v)
+        if miss > rgb_spectrum.TOLERANCE * max(scale, 1e-30):
+            return None
+        rows.append([c[0], c[1], c[2], scale])
+    return np.asarray(rows, np.float32)
+
+
+def _spectral_flag(values: dict[str, Any], flags: int) -> int:
+    return flags | (SPECTRAL if _spectra(values, flags) is not None else 0)
 
 
 def table_rows(values: dict[str, Any], loc: Location | None, thin_film: str) -> tuple[np.ndarray, str]:
@@ -160,7 +192,12 @@ def table_rows(values: dict[str, Any], loc: Location | None, thin_film: str) -> 
         if g != 0.0:
             warning = f'material "{NAME}": non-zero "g" ignored with the named medium "{values["name"]}"'
         g = 0.0
-    return profile_rows(g, PARAMS.value(values, "eta")), warning
+    rows = profile_rows(g, PARAMS.value(values, "eta"))
+    flags = FROM_REFLECTANCE if "reflectance" in values else 0
+    spectra = _spectra(values, flags)
+    if spectra is not None:                 # after the profile: read by spectrum_row()
+        rows = np.concatenate([rows, spectra])
+    return rows, warning
 
 
 @wp.func

@@ -12,6 +12,7 @@ import warp as wp
 import renderer
 from renderer.api import init_warp
 from renderer.errors import SceneError
+from renderer.color import rgb_spectrum
 from renderer.materials import beam_diffusion as bd
 from bsdf_harness import bsdf_moments
 from renderer.materials import material
@@ -171,7 +172,8 @@ def test_named_medium_and_defaults():
     v, _ = renderer.materials.resolve(skin)
     assert v["sigma_s"] == (0.74, 0.88, 1.01) and v["sigma_a"] == (0.032, 0.17, 0.48)
     rows, warning = renderer.materials.subsurface.table_rows(v, None, "rgb3")
-    np.testing.assert_array_equal(rows, bd.table_rows(0.0, 1.33))
+    np.testing.assert_array_equal(rows[:bd.N_ROWS], bd.table_rows(0.0, 1.33))
+    assert len(rows) == bd.N_ROWS + 2       # and its coefficients' spectra (a coloured medium)
     assert 'non-zero "g" ignored' in warning
     layout = dict((p.name, v) for p, v in renderer.materials.device_layout(material("subsurface"))[0])
     assert layout["sigma_a"] == (0.0011, 0.0024, 0.014) and layout["sigma_s"] == (2.55, 3.21, 3.77)
@@ -246,3 +248,19 @@ def test_step_lobes_sample_what_they_evaluate(lobe):
     else:
         assert 0.5 < m["pdf_integral"] <= 1.0 + 0.01
         assert np.all(m["albedo_sampled"] < 0.1)          # the reflection of an index-1.33 boundary
+
+
+@pytest.mark.parametrize("rgb", [(0.061, 0.97, 1.45), (0.74, 0.88, 1.01), (0.8, 0.6, 0.4), (8.9e-05, 8.4e-05, 0.0)])
+def test_upsampled_spectra_have_their_colour(rgb):
+    """pbrt-v4's RGBUnboundedSpectrum as fitted here: a spectrum whose colour under D65 (colour-science's
+    own integration, not the renderer's tables) is the RGB it came from."""
+    import colour
+    c, scale, _ = rgb_spectrum.unbounded(rgb)
+    lam = np.arange(360.0, 831.0)
+    sd = colour.SpectralDistribution(dict(zip(lam, scale * rgb_spectrum.sigmoid(c, lam))))
+    shape = colour.SpectralShape(360, 830, 1)
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape)
+    d65 = colour.SDS_ILLUMINANTS["D65"].copy().align(shape)
+    xyz = colour.sd_to_XYZ(sd, cmfs, d65, method="Integration") / 100.0
+    back = colour.XYZ_to_RGB(xyz, colour.RGB_COLOURSPACES["sRGB"], apply_cctf_encoding=False)
+    np.testing.assert_allclose(back, rgb, atol=2e-3 * max(rgb))
