@@ -48,7 +48,7 @@ from renderer.vecmath import PI, max3
 from renderer.optics.dispersion import sample_wavelength, wavelength_weight
 from renderer.color.spectral import LAMBDA_MAX_NM, LAMBDA_MIN_NM
 from renderer.materials.beam_diffusion import N_ROWS
-from renderer.materials.tabulated_bssrdf import albedo_from_reflectance, profile, sample_radius
+from renderer.materials.tabulated_bssrdf import albedo_from_reflectance, probe_radius, profile, sample_radius
 from renderer.optics.fresnel import fresnel_dielectric
 from renderer.sampling.frames import Frame, frame_from_normal, frame_from_tangent, to_local
 from renderer.sampling.rng import hash_u32
@@ -233,8 +233,6 @@ def subsurface_scatter(scene: Scene, b: BSDF, s: Surface, inst: int, wo: wp.vec3
 
 # --- pbrt-v4's subsurface material -------------------------------------------------------------
 
-#: The radius CDF value whose radius bounds the probe sphere (pbrt-v4's r_max: 99.9 % of the profile).
-PROBE_QUANTILE = wp.constant(0.999)
 TABULATED_SALT = wp.constant(wp.uint32(0x27D4EB2F))
 SSS_SLOT = pbrt_subsurface.SLOT
 #: The spectral body's coefficient rows follow the profile table.
@@ -310,7 +308,7 @@ def _body(b: BSDF, u_lambda: float) -> Medium:
         m.rho[c] = rho
         m.sigma_t[c] = st
         if st > 0.0:
-            m.r_max[c] = wp.max(sample_radius(rows, first, rho, PROBE_QUANTILE), 0.0) / st
+            m.r_max[c] = probe_radius(rows, first, rho) / st
     return m
 
 

@@ -34,6 +34,8 @@ N_RADIUS = 64
 N_BEAM = 100
 #: Nodes of the inverse table rho(rho_eff), uniform in rho_eff.
 N_INVERSE = 1024
+#: The share of the profile inside the probe sphere (pbrt-v4's r_max: its 99.9 % radius).
+PROBE_QUANTILE = 0.999
 
 
 def albedo_nodes() -> np.ndarray:
@@ -172,6 +174,7 @@ class ProfileTable:
     cdf: np.ndarray         # (N_RHO, N_RADIUS) its running spline integral
     rho_eff: np.ndarray     # (N_RHO,) the whole integral: the effective albedo
     inverse: np.ndarray     # (N_INVERSE,) rho at rho_eff = k / (N_INVERSE - 1) * rho_eff[-1]
+    r_max: np.ndarray       # (N_RHO,) optical radius holding PROBE_QUANTILE of the profile (CDF nodes, linear)
 
 
 @lru_cache(maxsize=8)
@@ -183,7 +186,8 @@ def profile_table(g: float, eta: float) -> ProfileTable:
     cdf = spline_integral(radius, profile)
     rho_eff = cdf[:, -1].copy()
     targets = np.linspace(0.0, rho_eff[-1], N_INVERSE)
-    return ProfileTable(rho, radius, profile, cdf, rho_eff, _invert(rho, rho_eff, targets))
+    r_max = np.array([np.interp(PROBE_QUANTILE * c[-1], c, radius) if c[-1] > 0 else 0.0 for c in cdf])
+    return ProfileTable(rho, radius, profile, cdf, rho_eff, _invert(rho, rho_eff, targets), r_max)
 
 
 def _invert(x: np.ndarray, f: np.ndarray, targets: np.ndarray) -> np.ndarray:
@@ -216,7 +220,8 @@ OFF_EFF = OFF_RADIUS + N_RADIUS
 OFF_PROFILE = OFF_EFF + N_RHO
 OFF_CDF = OFF_PROFILE + N_RHO * N_RADIUS
 OFF_INVERSE = OFF_CDF + N_RHO * N_RADIUS
-N_FLOATS = OFF_INVERSE + N_INVERSE
+OFF_RMAX = OFF_INVERSE + N_INVERSE
+N_FLOATS = OFF_RMAX + N_RHO
 #: Rows of the table in the layer table (the header, then the floats four to a row).
 N_ROWS = 1 + (N_FLOATS + 3) // 4
 
@@ -225,7 +230,7 @@ def table_rows(g: float, eta: float) -> np.ndarray:
     """The table as (n, 4) float32 rows for the scene's layer table: a header row (the number of
     floats and rho_eff at rho = 1), then every float in the order of the OFF_* offsets."""
     t = profile_table(float(g), float(eta))
-    flat = np.concatenate([t.rho, t.radius, t.rho_eff, t.profile.ravel(), t.cdf.ravel(), t.inverse])
+    flat = np.concatenate([t.rho, t.radius, t.rho_eff, t.profile.ravel(), t.cdf.ravel(), t.inverse, t.r_max])
     assert flat.size == N_FLOATS
     pad = (-flat.size) % 4
     body = np.concatenate([flat, np.zeros(pad)]).reshape(-1, 4)

@@ -8,14 +8,15 @@ interpolated with Catmull-Rom splines in albedo and optical radius, as pbrt-v4 d
   spline, so the density is the sampler's exact one and integrates to 1 over the plane.
 - ``sample_radius(rows, first, rho, u)`` inverts the spline's integral in optical radius: the
   interval from the interpolated CDF, then Newton steps with bisection on the cubic segment.
-- ``albedo_from_reflectance`` reads the inverse table rho(rho_eff) (pbrt-v4's SubsurfaceFromDiffuse).
+- ``albedo_from_reflectance`` reads the inverse table rho(rho_eff) (pbrt-v4's SubsurfaceFromDiffuse);
+  ``probe_radius`` the radius of the probe sphere.
 """
 from __future__ import annotations
 
 import warp as wp
 
 from renderer.materials.beam_diffusion import (N_INVERSE, N_RADIUS, N_RHO, OFF_CDF, OFF_EFF, OFF_INVERSE,
-                                               OFF_PROFILE, OFF_RADIUS, OFF_RHO)
+                                               OFF_PROFILE, OFF_RADIUS, OFF_RHO, OFF_RMAX)
 from renderer.vecmath import PI
 
 _N_RHO = wp.constant(N_RHO)
@@ -27,6 +28,7 @@ _OFF_EFF = wp.constant(OFF_EFF)
 _OFF_PROFILE = wp.constant(OFF_PROFILE)
 _OFF_CDF = wp.constant(OFF_CDF)
 _OFF_INVERSE = wp.constant(OFF_INVERSE)
+_OFF_RMAX = wp.constant(OFF_RMAX)
 #: Most Newton/bisection steps when inverting one spline segment.
 MAX_NEWTON = 40
 
@@ -213,3 +215,14 @@ def albedo_from_reflectance(rows: wp.array(dtype=wp.vec4), first: int, reflectan
     i = int(x)
     f = x - float(i)
     return (1.0 - f) * table_float(rows, first, _OFF_INVERSE + i) + f * table_float(rows, first, _OFF_INVERSE + i + 1)
+
+
+@wp.func
+def probe_radius(rows: wp.array(dtype=wp.vec4), first: int, rho: float) -> float:
+    """The optical radius of the probe sphere at albedo rho: the table's 99.9 % radius per albedo
+    node, linear in rho (any bound serves, as long as sampling and density use the same one)."""
+    k = _interval(rows, first, _OFF_RHO, _N_RHO, rho)
+    x0 = table_float(rows, first, _OFF_RHO + k)
+    x1 = table_float(rows, first, _OFF_RHO + k + 1)
+    f = wp.clamp((rho - x0) / (x1 - x0), 0.0, 1.0)
+    return (1.0 - f) * table_float(rows, first, _OFF_RMAX + k) + f * table_float(rows, first, _OFF_RMAX + k + 1)

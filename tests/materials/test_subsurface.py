@@ -264,3 +264,14 @@ def test_upsampled_spectra_have_their_colour(rgb):
     xyz = colour.sd_to_XYZ(sd, cmfs, d65, method="Integration") / 100.0
     back = colour.XYZ_to_RGB(xyz, colour.RGB_COLOURSPACES["sRGB"], apply_cctf_encoding=False)
     np.testing.assert_allclose(back, rgb, atol=2e-3 * max(rgb))
+
+
+def test_path_integrator_is_warned(tmp_path):
+    """pbrt-v4's "path" integrator ignores BSSRDFs (its subsurface bodies are clear glass); the
+    scene renders with subsurface scattering and says so at the Integrator's line."""
+    text = FLAT.format(params='"rgb reflectance" [0.5 0.5 0.5]').replace('"volpath"', '"path"')
+    (tmp_path / "path.pbrt").write_text(text)
+    warnings = renderer.load_scene(tmp_path / "path.pbrt").warnings
+    assert any("path.pbrt:5" in w and "ignores" in w and "subsurface" in w for w in warnings), warnings
+    (tmp_path / "volpath.pbrt").write_text(FLAT.format(params='"rgb reflectance" [0.5 0.5 0.5]'))
+    assert not any("ignores" in w for w in renderer.load_scene(tmp_path / "volpath.pbrt").warnings)
