@@ -12,7 +12,7 @@ from renderer.errors import SceneError
 from renderer.geometry.instances import Geometry, GeometryData, build_geometry
 from renderer.lights import build_light_table, kinds_in
 from renderer.lights.table import Lights
-from renderer.materials import Materials, build_materials, dielectric, disney, selection, thinfilm
+from renderer.materials import Materials, build_materials, dielectric, disney, selection, subsurface, thinfilm
 from renderer.color.rgb_weights import RgbWeightTable, make_rgb_weight_table
 from renderer.scene.description import SceneDescription
 from renderer.settings import THIN_FILM_MODE, thin_film_samples
@@ -43,10 +43,11 @@ class Features:
     lights: tuple[str, ...]     # the light kinds in the scene (next-event estimation samples these)
     escaping: tuple[str, ...]   # the kinds a ray leaving the scene can see (an environment, a soft sun)
     nee: bool = True
-    subsurface: bool = False    # some disney material scatters below its surface (renderer.subsurface)
+    subsurface: bool = False    # a disney material scatters below its surface, or a subsurface material is used
     alpha: bool = False         # some shape has an alpha cut-out or the interface material
     mix: bool = False           # some material is a mix (chosen per hit before shading)
-    dispersion: bool = False    # some dielectric's eta varies with the wavelength (renderer.optics.dispersion)
+    dispersion: bool = False    # some dielectric's eta varies with the wavelength (renderer.optics.dispersion),
+                                # or a subsurface body is spectral: paths may have a negative channel
 
 
 @dataclass
@@ -120,7 +121,9 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     S.shape_flip = wp.array(np.array(flip, np.int32), dtype=int, device=device)
     S.shape_alpha = wp.array(alpha, dtype=int, device=device)
     dispersion = any(m.kind == dielectric.NAME and dielectric.disperses(m.values) for m in desc.materials)
-    S.spectral, S.spectral_n = _spectral_table(thinfilm.NAME in used, dispersion, thin_film, device)
+    # the subsurface material's spectral bodies weigh their wavelengths with the same table
+    spectral_sss = bool(np.any((mats.flags.numpy() & subsurface.SPECTRAL) != 0))
+    S.spectral, S.spectral_n = _spectral_table(thinfilm.NAME in used, dispersion or spectral_sss, thin_film, device)
 
     light_kinds, escaping = kinds_in(lights)
     feats = Features(
@@ -129,10 +132,11 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
         lights=light_kinds,
         escaping=escaping,
         nee=nee,
-        subsurface=any(m.kind == disney.NAME and disney.has_subsurface(m.values) for m in desc.materials),
+        subsurface=any((m.kind == disney.NAME and disney.has_subsurface(m.values)) or m.kind == subsurface.NAME
+                       for m in desc.materials),
         alpha=bool(np.any(alpha >= 0)),
         mix=any(m.kind == selection.MIX for m in desc.materials),
-        dispersion=dispersion,
+        dispersion=dispersion or spectral_sss,
     )
     keep = [geo, mat_keep, tex_keep, light_keep, cam_keep, S.shape_material, S.shape_light, S.shape_flip,
             S.shape_alpha, S.spectral.w]

@@ -21,7 +21,7 @@ from renderer.geometry.intersect import surface_at
 from renderer.geometry.offsets import offset_origin, ray_epsilon
 from renderer.integrators.emission import emitted_adder, escaped_adder
 from renderer.integrators.shading import load_bsdf, shading_functions
-from renderer.integrators.subsurface import subsurface_scatter
+from renderer.integrators.subsurface import subsurface_step
 from renderer.integrators.visibility import ray_queries
 from renderer.lights import dispatch
 from renderer.lights.sample import light_sampler
@@ -53,6 +53,7 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
     sample_light = light_sampler(*dispatch(features.lights, "sample"))
     light_sampling = nee and len(features.lights) > 0
     has_sss = features.subsurface
+    subsurface_scatter = subsurface_step(features)
     closest, blocked = ray_queries(features)
     mixes = features.mix
     dispersion = features.dispersion

@@ -22,7 +22,7 @@ import warp as wp
 
 from renderer.errors import Location, SceneError, UnsupportedError
 from renderer.materials import (coatedconductor, coateddiffuse, conductor, dielectric, diffuse, diffusetransmission, disney,
-                                energy, selection, thindielectric, thinfilm)
+                                energy, selection, subsurface, thindielectric, thinfilm)
 from renderer.materials.bsdf import FIRST_DERIVED_FLAG, MAX_SLOTS
 from renderer.parameters import Parameter, Parameters, TextureRef
 from renderer.scene.description import MaterialDesc, SceneDescription, TextureDesc
@@ -35,7 +35,7 @@ FLOAT_MAX = float(np.finfo(np.float32).max)
 
 REGISTRY: dict[str, ModuleType] = {m.NAME: m for m in (diffuse, dielectric, conductor, thinfilm, disney,
                                                           coateddiffuse, coatedconductor, thindielectric,
-                                                          diffusetransmission)}
+                                                          diffusetransmission, subsurface)}
 for _m in REGISTRY.values():
     if len(_m.PARAMS.slot_names) > MAX_SLOTS or (1 << len(_m.PARAMS.flag_names)) > FIRST_DERIVED_FLAG:
         raise ValueError(f"material {_m.NAME}: more parameters than the device table holds")

@@ -59,6 +59,7 @@ class Builder(TransformDirectives):
         self.current_object: ObjectDefinition | None = None
         self.default_material: int | None = None
         self.world_begun = False
+        self.path_integrator: Location | None = None    # where pbrt-v4's "path" (not volpath) was named
 
     # -- driver
 
@@ -106,6 +107,10 @@ class Builder(TransformDirectives):
             self.scene.warnings.append(f"{self.source}: scene has no lights: the image will be black")
         unresolved = self.named_materials.resolve(self.scene, lambda: self._current_material(None))
         drop_interface_lights(self.scene, self.warn)
+        if self.path_integrator and any(m.kind == "subsurface" for m in self.scene.materials):
+            self.warn(self.path_integrator, 'pbrt-v4\'s "path" integrator ignores the "subsurface" material\'s '
+                      'BSSRDF (its bodies render as clear dielectrics); rendered with subsurface scattering, '
+                      'as "volpath" renders it')
         return (unresolved + missing_textures(self.scene, self.refused_textures)
                 + missing_mixed(self.scene, self.named_materials))
 
@@ -184,6 +189,7 @@ class Builder(TransformDirectives):
         name = self.check_known(d)
         if name not in ("path", "volpath"):
             self.unsupported(d.name, name, d.loc)
+        self.path_integrator = d.loc if name == "path" else None
         p = d.params
         self.scene.integrator = IntegratorDesc("path", p.int("maxdepth", 5, min=0), p.bool("regularize", False))
         self.warn_unused(d)
