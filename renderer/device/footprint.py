@@ -5,7 +5,7 @@ out-of-memory kill halfway through an upload.
 The estimate counts the large arrays only, each as many times as it is held at the peak of an
 upload: meshes on the host and on the device plus Warp's BVH nodes; instances with their
 transforms and the top-level BVH; image textures and environment maps (8-bit files as bytes,
-others as float32, with their sampling CDFs); the film's float64 sums. Image sizes come from
+others as float32, with their sampling CDFs); media grids; the film's float64 sums. Image sizes come from
 file headers (no decoding). It is meant to be within a factor of two of the
 measured peak (tests check it against real renders), which is enough to tell a 2 GB scene
 from a 40 GB one."""
@@ -83,6 +83,7 @@ def estimate(desc: SceneDescription, width: int, height: int) -> int:
         total += 2 * len(m.positions) * _VERTEX + len(m.indices) * (2 * _TRIANGLE + _BVH_PER_TRIANGLE)
     total += sum(len(s.transforms) * len(s.shapes) for s in desc.instance_sets) * _INSTANCE
     total += sum(w * h * per for _, _, w, h, per, _ in _images(desc))
+    total += sum(2 * m.grid_bytes() for m in desc.media)        # a medium's grids: host arrays, device volumes
     return total
 
 

@@ -16,6 +16,8 @@ import numpy as np
 
 from renderer import lights, materials
 from renderer.errors import Location, RenderError, SceneError, SceneErrors, UnsupportedError
+from renderer.media.description import MediumInterfaceDesc
+from renderer.scene.media_params import read_medium
 from renderer.scene.description import (CameraDesc, InstanceSetDesc, IntegratorDesc, MeshDesc, SamplerDesc,
                                         SceneDescription, ShapeDesc, TextureDesc)
 from renderer.scene.params import ParamSet
@@ -60,6 +62,9 @@ class Builder(TransformDirectives):
         self.default_material: int | None = None
         self.world_begun = False
         self.path_integrator: Location | None = None    # where pbrt-v4's "path" (not volpath) was named
+        self.media: dict[str, int] = {}          # MakeNamedMedium names -> SceneDescription.media
+        #: (shape index or -1 for the camera, inside, outside, where named): resolved at the end, as pbrt does
+        self.medium_refs: list[tuple[int, str, str, Location | None]] = []
 
     # -- driver
 
@@ -106,6 +111,7 @@ class Builder(TransformDirectives):
         if not lights.has_lights(self.scene):
             self.scene.warnings.append(f"{self.source}: scene has no lights: the image will be black")
         unresolved = self.named_materials.resolve(self.scene, lambda: self._current_material(None))
+        self._resolve_media()
         drop_interface_lights(self.scene, self.warn)
         if self.path_integrator and any(m.kind == "subsurface" for m in self.scene.materials):
             self.warn(self.path_integrator, 'pbrt-v4\'s "path" integrator ignores the "subsurface" material\'s '
@@ -158,6 +164,8 @@ class Builder(TransformDirectives):
         world_from_camera = inverse(self.state.ctm, "Camera", d.loc)
         self.named_coordinate_systems["camera"] = world_from_camera
         self.scene.camera = read_camera(name, d.params, world_from_camera, d.loc)
+        if self.state.medium_outside:       # pbrt-v4: the camera sits in the current outside medium
+            self.medium_refs.append((-1, self.state.medium_outside, self.state.medium_outside, d.loc))
         self.warn_unused(d)
 
     def Film(self, d: Directive) -> None:
@@ -191,7 +199,8 @@ class Builder(TransformDirectives):
             self.unsupported(d.name, name, d.loc)
         self.path_integrator = d.loc if name == "path" else None
         p = d.params
-        self.scene.integrator = IntegratorDesc("path", p.int("maxdepth", 5, min=0), p.bool("regularize", False))
+        kind = "path" if name == "path" else "volpath"      # what else we render with volpath, which is path without media
+        self.scene.integrator = IntegratorDesc(kind, p.int("maxdepth", 5, min=0), p.bool("regularize", False))
         self.warn_unused(d)
 
     def PixelFilter(self, d: Directive) -> None:
@@ -202,8 +211,38 @@ class Builder(TransformDirectives):
         self.unsupported(d.name, self.check_known(d), d.loc)
 
     def MediumInterface(self, d: Directive) -> None:
-        if any(d.args):
-            self.unsupported(d.name, "*", d.loc)
+        """One name: the same medium on both sides; two: inside, then outside (pbrt-v4's order)."""
+        inside = str(d.args[0])
+        outside = str(d.args[1]) if len(d.args) > 1 else inside
+        self.state.medium_inside, self.state.medium_outside, self.state.medium_loc = inside, outside, d.loc
+
+    def MakeNamedMedium(self, d: Directive) -> None:
+        name = str(d.args[0])
+        if name in self.media:
+            raise SceneError(f'medium "{name}" is defined twice (first at {self.scene.media[self.media[name]].loc})',
+                             d.loc)
+        kind = d.params.string("type")
+        if kind is None:
+            raise SceneError(f'MakeNamedMedium "{name}": "string type" is required', d.loc)
+        inverse(self.state.ctm, d.name, d.loc)
+        self.scene.media.append(read_medium(kind, name, d.params, self.state.ctm, d.loc, self.warn))
+        self.media[name] = len(self.scene.media) - 1
+        self.warn_unused(d)
+
+    def _resolve_media(self) -> None:
+        """Medium names to indices (pbrt-v4 too allows a name defined after its use)."""
+        def index(name: str, loc: Location | None) -> int:
+            if not name:
+                return -1
+            if name not in self.media:
+                raise SceneError(f'no medium named "{name}" (define it with MakeNamedMedium)', loc)
+            return self.media[name]
+
+        for shape, inside, outside, loc in self.medium_refs:
+            if shape < 0:
+                self.scene.camera_medium = index(outside, loc)
+            else:
+                self.scene.shapes[shape].media = MediumInterfaceDesc(index(inside, loc), index(outside, loc))
 
     def WorldBegin(self, d: Directive) -> None:
         if self.world_begun:
@@ -346,6 +385,9 @@ class Builder(TransformDirectives):
             area_light=self.state.area_light,
             reverse_orientation=self.state.reverse_orientation ^ swaps_handedness(ctm), loc=d.loc, alpha=alpha))
         index = len(self.scene.shapes) - 1
+        if self.state.medium_inside or self.state.medium_outside:
+            self.medium_refs.append((index, self.state.medium_inside, self.state.medium_outside,
+                                     self.state.medium_loc))
         if obj is not None:
             obj.shapes.append(index)
         else:

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any, Union
 import numpy as np
 
 from renderer.errors import Location
+from renderer.media.description import MediumDesc, MediumInterfaceDesc
 from renderer.sampling.sampler_spec import DEFAULT_SAMPLER
 from renderer.scene.params import ParamSet
 
@@ -80,7 +81,9 @@ class SamplerDesc:
 
 @dataclass
 class IntegratorDesc:
-    kind: str = "path"
+    """``path`` ignores media, as pbrt-v4's does; ``volpath`` (pbrt-v4's default) renders them."""
+
+    kind: str = "volpath"
     max_depth: int = 5
     regularize: bool = False
 
@@ -151,6 +154,7 @@ class ShapeDesc:
     reverse_orientation: bool = False
     loc: Location | None = None
     alpha: float | str = 1.0             # pbrt-v4's cut-out: a constant, or a float texture's name
+    media: MediumInterfaceDesc = field(default_factory=MediumInterfaceDesc)   # MediumInterface at the shape
 
 
 @dataclass
@@ -174,5 +178,7 @@ class SceneDescription:
     shapes: list[ShapeDesc] = field(default_factory=list)
     instance_sets: list[InstanceSetDesc] = field(default_factory=list)
     lights: list[LightDesc] = field(default_factory=list)        # LightSource lights, in file order
+    media: list[MediumDesc] = field(default_factory=list)        # MakeNamedMedium, in file order
+    camera_medium: int = -1                                      # the medium the camera sits in (-1: vacuum)
     warnings: list[str] = field(default_factory=list)
     path: Path | None = None

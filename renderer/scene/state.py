@@ -19,6 +19,9 @@ class GraphicsState:
     material_loc: Location | None = None # where a NamedMaterial was set (for its error if never defined)
     area_light: LightDesc | None = None
     shutter_open_active: bool = True     # False after "ActiveTransform EndTime": transforms are skipped
+    medium_inside: str = ""              # MediumInterface's names ("": vacuum)
+    medium_outside: str = ""
+    medium_loc: Location | None = None
 
 
 @dataclass

@@ -245,7 +245,7 @@ def test_defaults_without_options(tmp_path):
     assert (s.camera.fov_deg, s.camera.lens_radius, s.camera.focal_distance) == (90.0, 0.0, 1e6)
     assert (s.film.width, s.film.height, s.film.filename) == (1280, 720, "pbrt.exr")
     assert (s.sampler.kind, s.sampler.spp, s.sampler.seed) == ("zsobol", 16, 0)     # pbrt-v4's default
-    assert (s.integrator.kind, s.integrator.max_depth) == ("path", 5)
+    assert (s.integrator.kind, s.integrator.max_depth) == ("volpath", 5)     # pbrt-v4's default
     # the default material appears once, lazily: diffuse, reflectance 0.5
     assert len(s.materials) == 1 and s.materials[0].kind == "diffuse"
     assert s.materials[0].values == {} and diffuse.PARAMS.value({}, "reflectance") == 0.5
@@ -262,7 +262,7 @@ def test_defaults_without_options(tmp_path):
     (HEAD + 'LightSource "sunsky"', 3, 'LightSource "sunsky" is not supported'),
     (HEAD + 'LightSource "goniometric"', 3, 'LightSource "goniometric" needs a "filename"'),
     (HEAD + 'Material "measured"', 3, 'Material "measured" is not supported'),
-    (HEAD + 'MediumInterface "fog" ""', 3, "MediumInterface is not supported"),
+    (HEAD + 'MediumInterface "fog" ""\nShape "sphere"', 3, 'no medium named "fog"'),
     (HEAD + 'AreaLightSource "spot"', 3, 'AreaLightSource "spot" is not supported'),
     (HEAD + 'NamedMaterial "nope"\nShape "sphere"', 4, 'no material named "nope"'),
     (HEAD + 'MakeNamedMaterial "m" "string type" "diffuse"\nMakeNamedMaterial "m" "string type" "diffuse"', 4,
@@ -297,9 +297,8 @@ def test_unsupported_things_and_unused_parameters_warn_with_location(tmp_path):
     assert s.warnings == [
         f'{f}:1: Film "gbuffer": rendered as an "rgb" film',
         f'{f}:1: Film "gbuffer": parameter "float bogus" is not supported and was ignored',
-        f'{f}:3: Integrator "bdpt": rendered with the "path" integrator',
+        f'{f}:3: Integrator "bdpt": ' + UNSUPPORTED[('Integrator', '*')][1],
         f"{f}:5: ColorSpace: colours are always linear sRGB",
-        f"{f}:6: MakeNamedMedium: {UNSUPPORTED[('MakeNamedMedium', '*')][1]}",
         f'{f}:9: Shape "sphere": parameter "float emission" is not supported and was ignored',
         f"{f}:10: Attribute: default parameters set by Attribute are ignored",
         f"{f}: scene has no lights: the image will be black",
@@ -515,7 +514,7 @@ def test_mini_scene_round_trip():
     assert s.path == DATA / "mini.pbrt"
     assert (s.film.width, s.film.height, s.film.filename) == (64, 48, "mini.exr")
     assert (s.sampler.kind, s.sampler.spp) == ("zsobol", 8)
-    assert (s.integrator.kind, s.integrator.max_depth) == ("path", 7)
+    assert (s.integrator.kind, s.integrator.max_depth) == ("volpath", 7)
     np.testing.assert_allclose(s.camera.camera_to_world[:3, 3], [0, 1, -5])
     np.testing.assert_allclose(s.camera.camera_to_world[:3, 2], np.array([0, -1, 5]) / math.sqrt(26))
     assert s.camera.fov_deg == 40
