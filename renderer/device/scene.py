@@ -13,6 +13,7 @@ from renderer.geometry.instances import Geometry, GeometryData, build_geometry
 from renderer.lights import build_light_table, kinds_in
 from renderer.lights.table import Lights
 from renderer.materials import Materials, build_materials, dielectric, disney, selection, subsurface, thinfilm
+from renderer.media.device import Media, upload_media
 from renderer.color.rgb_weights import RgbWeightTable, make_rgb_weight_table
 from renderer.scene.description import SceneDescription
 from renderer.settings import THIN_FILM_MODE, thin_film_samples
@@ -32,6 +33,9 @@ class Scene:
     shape_alpha: wp.array(dtype=int)    # alpha texture id, -1 opaque (see renderer.integrators.visibility)
     spectral: RgbWeightTable    # the thin-film BSDF's spectrum → RGB weights (1 dummy entry if unused)
     spectral_n: int             # its wavelengths per evaluation, 0 for rgb3
+    media: Media                # participating media (a one-entry stand-in unless Features.media)
+    shape_media: wp.array(dtype=wp.vec2i)   # per shape its MediumInterface (inside, outside); -1 vacuum
+    camera_medium: int          # the medium camera rays start in, -1 vacuum
 
 
 @dataclass(frozen=True)
@@ -48,6 +52,8 @@ class Features:
     mix: bool = False           # some material is a mix (chosen per hit before shading)
     dispersion: bool = False    # some dielectric's eta varies with the wavelength (renderer.optics.dispersion),
                                 # or a subsurface body is spectral: paths may have a negative channel
+    media: bool = False         # volpath with participating media (renderer.media); interface shapes are then
+                                # medium boundaries the path crosses, not alpha cut-outs
 
 
 @dataclass
@@ -102,7 +108,8 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
 
     geo = build_geometry([(m.positions, m.indices, m.normals, m.uvs) for m in desc.meshes],
                          inst_mesh_a, inst_shape_a, xform_a, device)
-    alpha = shape_alpha_ids(desc, table)
+    media = uses_media(desc)
+    alpha = shape_alpha_ids(desc, table, media)
     tex, tex_keep = table.upload(device)
     L, light_keep = lights.upload(device)
 
@@ -124,6 +131,11 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     # the subsurface material's spectral bodies weigh their wavelengths with the same table
     spectral_sss = bool(np.any((mats.flags.numpy() & subsurface.SPECTRAL) != 0))
     S.spectral, S.spectral_n = _spectral_table(thinfilm.NAME in used, dispersion or spectral_sss, thin_film, device)
+    media_up = upload_media(desc.media if media else [], device)
+    S.media = media_up.struct
+    pairs = [(s.media.inside, s.media.outside) for s in desc.shapes] if media else []
+    S.shape_media = wp.array(np.array(pairs or [(-1, -1)], np.int32), dtype=wp.vec2i, device=device)
+    S.camera_medium = desc.camera_medium if media else -1
 
     light_kinds, escaping = kinds_in(lights)
     feats = Features(
@@ -137,19 +149,27 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
         alpha=bool(np.any(alpha >= 0)),
         mix=any(m.kind == selection.MIX for m in desc.materials),
         dispersion=dispersion or spectral_sss,
+        media=media,
     )
     keep = [geo, mat_keep, tex_keep, light_keep, cam_keep, S.shape_material, S.shape_light, S.shape_flip,
-            S.shape_alpha, S.spectral.w]
+            S.shape_alpha, S.spectral.w, media_up.keep, S.shape_media]
     return DeviceScene(struct=S, features=feats, device=device, width=width, height=height, keep=keep, geometry=geo,
                        warnings=warnings)
 
 
-def shape_alpha_ids(desc: SceneDescription, table: TextureTable) -> np.ndarray:
-    """Per shape the texture id of its alpha (a constant 0 for the interface material), -1 where
-    the shape is opaque (alpha 1, pbrt-v4's default)."""
+def uses_media(desc: SceneDescription) -> bool:
+    """Whether the render goes through media: the volpath integrator (pbrt-v4's path ignores
+    media) and some medium that a camera ray or a shape's MediumInterface puts a path into."""
+    return desc.integrator.kind == "volpath" and bool(desc.media) and (
+        desc.camera_medium >= 0 or any(s.media.transition for s in desc.shapes))
+
+
+def shape_alpha_ids(desc: SceneDescription, table: TextureTable, media: bool = False) -> np.ndarray:
+    """Per shape the texture id of its alpha (a constant 0 for the interface material unless the
+    kernel crosses it as a medium boundary), -1 where the shape is opaque (alpha 1, pbrt-v4's default)."""
     ids = -np.ones(max(1, len(desc.shapes)), np.int32)
     for i, s in enumerate(desc.shapes):
-        if desc.materials[s.material].kind == selection.INTERFACE:
+        if desc.materials[s.material].kind == selection.INTERFACE and not media:
             ids[i] = table.add_constant(0.0)
         elif isinstance(s.alpha, str):
             ids[i] = table.lookup(s.alpha, "float", desc.textures, s.loc)
