@@ -20,7 +20,7 @@ def scene_files(desc: SceneDescription) -> SceneFiles:
 
 
 def localised(desc: SceneDescription, files: SceneFiles, folder: Path) -> tuple[SceneDescription, dict[str, str]]:
-    """A copy of ``desc`` whose textures and environment images read the shipped ``files``,
+    """A copy of ``desc`` whose textures, environment images and NanoVDB media read the shipped ``files``,
     written under ``folder`` (one subfolder per file keeps names and suffixes as they were), and
     each written file's original path by its new one (so errors can name the file the user knows)."""
     local: dict[str, str] = {}
@@ -39,4 +39,6 @@ def localised(desc: SceneDescription, files: SceneFiles, folder: Path) -> tuple[
     lights = [dataclasses.replace(light, values={**light.values,
                                                  "filename": local[str(Path(light.values["filename"]).resolve())]})
               if light.values.get("filename") is not None else light for light in desc.lights]
-    return dataclasses.replace(desc, textures=textures, lights=lights), {v: k for k, v in local.items()}
+    media = [dataclasses.replace(m, filename=Path(local[str(m.filename.resolve())])) if m.filename is not None else m
+             for m in desc.media]
+    return dataclasses.replace(desc, textures=textures, lights=lights, media=media), {v: k for k, v in local.items()}

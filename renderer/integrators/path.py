@@ -20,6 +20,7 @@ from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import surface_at
 from renderer.geometry.offsets import offset_origin, ray_epsilon
 from renderer.integrators.emission import emitted_adder, escaped_adder
+from renderer.integrators.media_path import crossed, is_interface, media_functions, start_medium
 from renderer.integrators.shading import load_bsdf, shading_functions
 from renderer.integrators.subsurface import subsurface_step
 from renderer.integrators.visibility import ray_queries
@@ -28,6 +29,7 @@ from renderer.lights.sample import light_sampler
 from renderer.materials import dielectric, kind_id
 from renderer.materials.bsdf import SPECULAR
 from renderer.materials.selection import choose_material
+from renderer.media.tracking import ABSORBED, SCATTERED, delta_track, mean3
 from renderer.optics.dispersion import sample_wavelength, wavelength_weight
 from renderer.pixel_filter import sample_filter
 from renderer.sampling.frames import to_local, to_world
@@ -57,6 +59,8 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
     closest, blocked = ray_queries(features)
     mixes = features.mix
     dispersion = features.dispersion
+    media = features.media                  # volpath's media (renderer.integrators.media_path)
+    shadow, scatter_in_medium = media_functions(features)
 
     @wp.kernel(module="unique", module_options=KERNEL_OPTIONS)
     def integrate(scene: Scene, smp: SamplerParams, seed: int, sample_index: int, row_offset: int, max_depth: int,
@@ -91,11 +95,43 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
         prev_p = o
         depth = int(0)
         hero = float(0.0)       # the path's wavelength (nm) once it met a dispersive dielectric; 0: none yet
+        if wp.static(media):
+            ms = start_medium(scene, seed, sample_index, pixel)
         while True:
             hit = closest(scene, o, d, 1.0e30)
             n_rays += 1
+            beta_l = beta           # what light found now is weighted by (media: over the channels' mean)
+            if wp.static(media):
+                # media: the next event before the surface (renderer.media.tracking)
+                if ms.medium >= 0:
+                    t_hit = float(1.0e30)
+                    if hit.inst >= 0:
+                        t_hit = hit.t
+                    tr = delta_track(scene.media, ms.medium, o, d, t_hit, ms.c, ms.rng, beta, ms.r_u, L,
+                                     depth < max_depth)
+                    ms.rng = tr.rng
+                    beta = tr.beta
+                    ms.r_u = tr.r_u
+                    L = tr.L
+                    if tr.event == ABSORBED:
+                        break
+                    if tr.event == SCATTERED:
+                        if depth >= max_depth:
+                            break
+                        depth += 1
+                        sc = scatter_in_medium(scene, tr.p, -d, ms.medium, ms.c, ms.rng, beta, ms.r_u)
+                        ms.rng = sc.rng
+                        L = L + sc.L
+                        n_rays += 1
+                        prev_pdf = sc.pdf
+                        prev_specular = False
+                        prev_p = tr.p
+                        o = tr.p
+                        d = sc.wi
+                        continue
+                beta_l = beta / mean3(ms.r_u)
             if hit.inst < 0:
-                L = add_escaped(scene.lights, o, d, beta, sel, prev_pdf, prev_specular, L)
+                L = add_escaped(scene.lights, o, d, beta_l, sel, prev_pdf, prev_specular, L)
                 break
             shape = scene.geo.inst_shape[hit.inst]
             s = surface_at(scene.geo, hit, scene.shape_flip[shape] != 0)
@@ -103,7 +139,12 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
             if wp.static(len(emitters) > 0):
                 li = scene.shape_light[shape]
                 if li >= 0:
-                    L = add_emitted(scene.lights, li, prev_p, s.p, s.ng, wo, beta, sel, prev_pdf, prev_specular, L)
+                    L = add_emitted(scene.lights, li, prev_p, s.p, s.ng, wo, beta_l, sel, prev_pdf, prev_specular, L)
+            if wp.static(media):
+                if is_interface(scene, shape):      # a boundary between media: cross it, no bounce
+                    ms.medium = crossed(scene, shape, s.ng, d, ms.medium)
+                    o = offset_origin(s, d)
+                    continue
             if depth >= max_depth:
                 break
             m = scene.shape_material[shape]
@@ -168,7 +209,18 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
                             to_light = wp.dot(s.p + ls.wi * ls.dist - origin, ls.wi)
                             t_max = to_light * (1.0 - 1.0e-4) - ray_epsilon(s.p)
                             n_rays += 1
-                            if not blocked(scene, origin, ls.wi, t_max):
+                            if wp.static(media):
+                                # transmittance through media and interfaces (renderer.integrators.media_path)
+                                tm = shadow(scene, origin, ls.wi, t_max, crossed(scene, shape, s.ng, ls.wi, ms.medium),
+                                            ms.c, ms.rng)
+                                ms.rng = tm.rng
+                                if max3(tm.T) > 0.0:
+                                    w = float(1.0)
+                                    if not ls.delta:
+                                        w = power_heuristic(ls.pdf, fb.pdf)
+                                    L = L + wp.cw_mul(wp.cw_mul(beta, wp.cw_mul(f, ls.L)), tm.T) * (
+                                        w / (ls.pdf * mean3(wp.cw_mul(ms.r_u, tm.r))))
+                            elif not blocked(scene, origin, ls.wi, t_max):
                                 w = float(1.0)
                                 if not ls.delta:
                                     w = power_heuristic(ls.pdf, fb.pdf)
@@ -190,8 +242,12 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
             o = offset_origin(s, wi)
             d = wi
             depth += 1
+            if wp.static(media):
+                ms.medium = crossed(scene, shape, s.ng, wi, ms.medium)
             if rr_depth >= 0 and depth >= rr_depth:
                 mb = max3(beta) * eta_scale
+                if wp.static(media):
+                    mb = mb / mean3(ms.r_u)
                 if mb < 1.0:
                     q = wp.max(0.0, 1.0 - mb)
                     if u_rr < q:

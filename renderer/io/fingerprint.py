@@ -43,8 +43,9 @@ def _feed(h: "hashlib._Hash", x: Any) -> None:
 
 
 def referenced_files(desc: SceneDescription) -> list[Path]:
-    """The files the device upload reads (image textures, environment images), resolved, in scene
-    order; meshes and instance transforms are already arrays in the description."""
+    """The files the device upload reads (image textures, environment images, NanoVDB media),
+    resolved, in scene order; meshes, instance transforms and dense grids are already arrays in
+    the description."""
     files = []
     for t in desc.textures.values():
         name = t.params.params.get("filename")
@@ -53,6 +54,7 @@ def referenced_files(desc: SceneDescription) -> list[Path]:
     for light in desc.lights:
         if light.values.get("filename") is not None:
             files.append(Path(light.values["filename"]).resolve())
+    files += [m.filename.resolve() for m in desc.media if m.filename is not None]
     return files
 
 

@@ -16,6 +16,11 @@ from renderer.scene.params import ParamSet
 
 #: float32 copies of a grid held at the peak of an upload (host array, device volume, its build)
 GRID_COPIES = 3
+#: pbrt-v4's CIE_Y_integral, the luminance of its normalised illuminant spectra. Its lights and its
+#: homogeneous and uniformgrid media divide an RGB ``Le`` by it (SpectrumToPhotometric), so
+#: rgb (1, 1, 1) is radiance 1; its rgbgrid medium does not, so there an ``Le`` of (1, 1, 1) is
+#: this much brighter. We follow pbrt-v4 (measured: tests/media/test_pbrt_media.py).
+RGBGRID_LE_SCALE = 106.856895
 
 
 def read_medium(kind: str, name: str, params: ParamSet, ctm: np.ndarray, loc: Location,
@@ -150,7 +155,7 @@ def _read_rgb_grid(m: MediumDesc, params: ParamSet, loc: Location, limit: int) -
     sa, ss, le = (_grid(params, k, dims, what, 3) for k in ("sigma_a", "sigma_s", "Le"))
     m.rgb_sigma_a = None if sa is None else sa * np.float32(scale)
     m.rgb_sigma_s = None if ss is None else ss * np.float32(scale)
-    m.rgb_Le = None if le is None else le * np.float32(params.float("Lescale", 1.0, min=0.0))
+    m.rgb_Le = None if le is None else le * np.float32(params.float("Lescale", 1.0, min=0.0) * RGBGRID_LE_SCALE)
     m.sigma_a = m.sigma_s = np.full(3, scale)      # the factor of a grid that is not given (1 x scale)
     m.Le = np.zeros(3)
 

@@ -8,7 +8,7 @@ import pytest
 
 from renderer.errors import Location, SceneError, UnsupportedError
 from renderer.media.presets import MEASURED
-from renderer.scene.media_params import read_medium
+from renderer.scene.media_params import RGBGRID_LE_SCALE, read_medium
 from renderer.scene import load_description
 from renderer.scene.params import Param, ParamSet
 
@@ -79,7 +79,7 @@ def test_rgbgrid(tmp_path):
     m = s.media[0]
     assert m.rgb_sigma_a.shape == (1, 1, 2, 3) and m.rgb_sigma_s is None
     np.testing.assert_allclose(m.rgb_sigma_a[0, 0, 1], [0, 2, 0])
-    np.testing.assert_allclose(m.rgb_Le[0, 0, 1], [6, 6, 6])
+    np.testing.assert_allclose(m.rgb_Le[0, 0, 1], np.array([6, 6, 6]) * RGBGRID_LE_SCALE, rtol=1e-6)   # pbrt-v4: unnormalised
     assert m.emissive
 
 
