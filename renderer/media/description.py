@@ -33,6 +33,11 @@ class MediumDesc:
     #: uniformgrid: (nz, ny, nx) density; its optional (nz, ny, nx) Lescale grid (None: 1 everywhere)
     density: np.ndarray | None = None
     le_scale_grid: np.ndarray | None = None
+    #: uniformgrid: a (nz, ny, nx) temperature grid (kelvin) emitting pbrt's peak-normalised
+    #: blackbody at (T - offset) * scale where that exceeds 100 K (instead of Le)
+    temperature: np.ndarray | None = None
+    temperature_offset: float = 0.0
+    temperature_scale: float = 1.0
     #: rgbgrid: (nz, ny, nx, 3) sigma_a, sigma_s (already times "scale") and Le (times "Lescale");
     #: a grid not given is 1 (sigma) or 0 (Le) everywhere
     rgb_sigma_a: np.ndarray | None = None
@@ -46,11 +51,12 @@ class MediumDesc:
 
     @property
     def emissive(self) -> bool:
-        return bool(np.max(self.Le) > 0.0) or (self.rgb_Le is not None and bool(np.max(self.rgb_Le) > 0.0))
+        return (bool(np.max(self.Le) > 0.0) or self.temperature is not None
+                or (self.rgb_Le is not None and bool(np.max(self.rgb_Le) > 0.0)))
 
     def grid_bytes(self) -> int:
         """What the grids take as float32 on the host (the device holds one more copy)."""
-        grids = (self.density, self.le_scale_grid, self.rgb_sigma_a, self.rgb_sigma_s, self.rgb_Le)
+        grids = (self.density, self.le_scale_grid, self.temperature, self.rgb_sigma_a, self.rgb_sigma_s, self.rgb_Le)
         return sum(4 * g.size for g in grids if g is not None)
 
 

@@ -14,13 +14,19 @@ import numpy as np
 import warp as wp
 
 from renderer.errors import SceneError
+from renderer.media.blackbody import SIZE, T_MAX, T_MIN, blackbody_table
 from renderer.media.description import KINDS, MediumDesc
 from renderer.media.majorants import majorants
 from renderer.textures.noise import permutation
 
 HOMOGENEOUS, UNIFORMGRID, RGBGRID, CLOUD, NANOVDB = (wp.constant(KINDS.index(k)) for k in KINDS)
-#: volume slots per medium: uniformgrid (density, Lescale, default Lescale), rgbgrid (sigma_a, sigma_s, Le), nanovdb (density)
-SLOTS = 3
+#: volume slots per medium: uniformgrid (density, Lescale, default Lescale, temperature), rgbgrid
+#: (sigma_a, sigma_s, Le), nanovdb (density)
+SLOTS = 4
+#: the blackbody table's log-temperature axis
+LOG_T_MIN = wp.constant(float(np.log(T_MIN)))
+LOG_T_STEP = wp.constant(float(np.log(T_MAX / T_MIN) / (SIZE - 1)))
+TABLE_LAST = wp.constant(SIZE - 1)
 
 
 @wp.struct
@@ -41,6 +47,8 @@ class Media:
     maj_res: wp.array(dtype=wp.vec3i)        # its majorant grid's cells per axis
     maj: wp.array(dtype=wp.vec3)             # per cell, a bound of sigma_t per channel
     perm: wp.array(dtype=int)                # Perlin noise permutation (the cloud)
+    temperature: wp.array(dtype=wp.vec2)     # a temperature grid's offset and scale
+    blackbody: wp.array(dtype=wp.vec3)       # renderer.media.blackbody's table (1 entry unless used)
 
 
 @dataclass
@@ -106,7 +114,7 @@ def upload_media(media: list[MediumDesc], device: str) -> MediaUpload:
                 # slot 1 the Lescale grid; without one, slot 2 pbrt's default, a 1x1x1 grid of 1
                 ones = np.ones((1, 1, 1), np.float32)
                 grids = [_volume(m.density, device), _volume(m.le_scale_grid, device),
-                         _volume(ones, device) if m.le_scale_grid is None else None]
+                         _volume(ones, device) if m.le_scale_grid is None else None, _volume(m.temperature, device)]
                 res[i] = m.density.shape[::-1]
             elif m.kind == "rgbgrid":
                 grids = [_volume(g, device) for g in (m.rgb_sigma_a, m.rgb_sigma_s, m.rgb_Le)]
@@ -141,6 +149,10 @@ def upload_media(media: list[MediumDesc], device: str) -> MediaUpload:
     S.maj = wp.array(np.concatenate(cells), dtype=wp.vec3, device=device)
     has_cloud = any(m.kind == "cloud" for m in media)
     S.perm = wp.array(permutation() if has_cloud else np.zeros(1, np.int32), dtype=int, device=device)
-    keep += [S.kind, S.to_medium, S.lo, S.hi, S.res, S.sigma_a, S.sigma_s, S.Le, S.g, S.vol, S.cloud, S.maj_first,
+    S.temperature = wp.array(np.array([(m.temperature_offset, m.temperature_scale) for m in ms], np.float32),
+                             dtype=wp.vec2, device=device)
+    hot = any(m.temperature is not None for m in media)
+    S.blackbody = wp.array(blackbody_table() if hot else np.zeros((1, 3), np.float32), dtype=wp.vec3, device=device)
+    keep += [S.temperature, S.blackbody, S.kind, S.to_medium, S.lo, S.hi, S.res, S.sigma_a, S.sigma_s, S.Le, S.g, S.vol, S.cloud, S.maj_first,
              S.maj_res, S.maj, S.perm]
     return MediaUpload(S, keep)

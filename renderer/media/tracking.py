@@ -19,7 +19,8 @@ from __future__ import annotations
 
 import warp as wp
 
-from renderer.media.device import CLOUD, HOMOGENEOUS, NANOVDB, RGBGRID, UNIFORMGRID, Media
+from renderer.media.device import (CLOUD, HOMOGENEOUS, LOG_T_MIN, LOG_T_STEP, NANOVDB, RGBGRID, TABLE_LAST,
+                                   UNIFORMGRID, Media)
 from renderer.textures.noise import noise
 
 #: what delta tracking ends with
@@ -72,6 +73,19 @@ def cloud_density(media: Media, mi: int, p: wp.vec3) -> float:
 
 
 @wp.func
+def _temperature_emission(media: Media, mi: int, x: wp.vec3) -> wp.vec3:
+    """pbrt's peak-normalised blackbody at the grid's temperature, offset and scaled; 0 up to 100 K."""
+    tp = media.temperature[mi]
+    t = (wp.volume_sample_f(media.vol[mi, 3], x, wp.Volume.LINEAR) - tp[0]) * tp[1]
+    if t <= 100.0:
+        return wp.vec3(0.0)
+    f = wp.clamp((wp.log(t) - LOG_T_MIN) / LOG_T_STEP, 0.0, float(TABLE_LAST))
+    i = wp.min(int(f), TABLE_LAST - 1)
+    a = f - float(i)
+    return media.blackbody[i] * (1.0 - a) + media.blackbody[i + 1] * a
+
+
+@wp.func
 def properties(media: Media, mi: int, p: wp.vec3) -> MediumPoint:
     """sigma_a, sigma_s and Le of medium ``mi`` at world point p."""
     r = MediumPoint()
@@ -87,6 +101,8 @@ def properties(media: Media, mi: int, p: wp.vec3) -> MediumPoint:
         dens = wp.volume_sample_f(media.vol[mi, 0], x, wp.Volume.LINEAR)
         r.sigma_a = r.sigma_a * dens
         r.sigma_s = r.sigma_s * dens
+        if media.vol[mi, 3] != wp.uint64(0):
+            r.Le = _temperature_emission(media, mi, x)
         if wp.max(r.Le) > 0.0:
             # the Lescale grid (slot 1), or pbrt's default (slot 2): a 1x1x1 grid of 1, itself
             # interpolated against zeros outside, so a tent over the bounds

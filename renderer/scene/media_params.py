@@ -129,11 +129,13 @@ def _read_density_grid(m: MediumDesc, params: ParamSet, loc: Location, limit: in
     what = f'uniformgrid medium "{m.name}"'
     if "density" not in params:
         raise SceneError(f'{what}: no "density" values', loc)
-    dims = _dims(params, m.name, loc, 2 if "Lescale" in params else 1, 1, limit)
+    dims = _dims(params, m.name, loc, 1 + ("Lescale" in params) + ("temperature" in params), 1, limit)
     m.density = _grid(params, "density", dims, what)
-    if "temperature" in params:
-        raise UnsupportedError(f'{what}: "temperature" (blackbody emission from a temperature grid) is not '
-                               'supported', params.get("temperature").loc)
+    m.temperature = _grid(params, "temperature", dims, what)
+    if m.temperature is not None and "Le" in params:
+        raise SceneError(f'{what}: both "Le" and "temperature" are given (pbrt-v4 takes one)', params.get("Le").loc)
+    m.temperature_offset = params.float("temperatureoffset", params.float("temperaturecutoff", 0.0))
+    m.temperature_scale = params.float("temperaturescale", 1.0, min=0.0)
     le = _emission(params)
     scale = params.params.get("Lescale")
     if scale is not None and len(scale.values) == 1 and np.prod(dims) != 1:

@@ -73,6 +73,17 @@ def test_uniformgrid_layout_bounds_and_transform(tmp_path):
     np.testing.assert_array_equal(m.sigma_s, [2, 2, 2])
 
 
+def test_uniformgrid_temperature(tmp_path):
+    s = load(tmp_path, HEAD + 'MakeNamedMedium "g" "string type" "uniformgrid" "integer nx" 2 "float density" [1 2]\n'
+                              '  "float temperature" [1500 3000] "float temperaturecutoff" 500 "float temperaturescale" 2\n')
+    m = s.media[0]
+    assert m.emissive and m.temperature.shape == (1, 1, 2)
+    assert (m.temperature_offset, m.temperature_scale) == (500.0, 2.0)
+    s = load(tmp_path, HEAD + 'MakeNamedMedium "g" "string type" "uniformgrid" "float density" [1]\n'
+                              '  "float temperature" [1500] "float temperatureoffset" 100 "float temperaturecutoff" 500\n')
+    assert s.media[0].temperature_offset == 100.0      # offset wins over pbrt's older name
+
+
 def test_rgbgrid(tmp_path):
     s = load(tmp_path, HEAD + 'MakeNamedMedium "g" "string type" "rgbgrid" "integer nx" 2\n'
                               '  "rgb sigma_a" [1 0 0  0 1 0] "rgb Le" [1 1 1  2 2 2] "float scale" 2 "float Lescale" 3\n')
@@ -121,8 +132,10 @@ def test_medium_may_be_named_before_it_is_defined(tmp_path):
      "must not be negative", SceneError),
     (HEAD + 'MakeNamedMedium "m" "string type" "uniformgrid" "integer nx" 2 "float density" [1 1]\n'
             ' "float Lescale" 2', 4, '"Lescale" must give', SceneError),
-    (HEAD + 'MakeNamedMedium "m" "string type" "uniformgrid" "float density" [1]\n "float temperature" [900]',
-     4, "temperature", UnsupportedError),
+    (HEAD + 'MakeNamedMedium "m" "string type" "uniformgrid" "float density" [1] "rgb Le" [1 1 1]\n'
+            ' "float temperature" [900]', 3, 'both "Le" and "temperature"', SceneError),
+    (HEAD + 'MakeNamedMedium "m" "string type" "uniformgrid" "float density" [1]\n "float temperature" [900 1]',
+     4, '"temperature" has 2 values', SceneError),
     (HEAD + 'MakeNamedMedium "m" "string type" "uniformgrid" "float density" [1] "point3 p1" [1 0 1]', 3,
      "enclose no volume", SceneError),
     (HEAD + 'MakeNamedMedium "m" "string type" "rgbgrid" "rgb Le" [1 1 1]', 3, 'needs "sigma_a" and/or', SceneError),

@@ -199,3 +199,32 @@ def test_nanovdb_file_read_by_warp(tmp_path):
     passed, _, _, trans = run(m, o, d, 6.0)
     check_mean(trans, np.exp(-tau))
     check_mean(passed, np.exp(-tau))
+
+
+def test_temperature_grid_emits_pbrts_peak_normalised_blackbody():
+    """A purely absorbing uniformgrid at 1600 K: L = the integral of sigma_a(t) tent(t) blackbody(T'(t))
+    exp(-tau(t)), with T' = (T - offset) scale (3000 K where the grid is not interpolated against the
+    zeros outside it) and pbrt's default Lescale tent."""
+    from renderer.media.blackbody import SIZE, T_MAX, T_MIN, blackbody_table
+
+    dens = np.array([[[0.5, 1.0], [1.5, 0.8]], [[1.2, 0.4], [0.9, 1.1]]], np.float32)
+    m = MediumDesc(kind="uniformgrid", name="t", sigma_a=np.array([0.6, 0.6, 0.6]), sigma_s=np.zeros(3),
+                   density=dens, temperature=np.full((2, 2, 2), 1600.0, np.float32), temperature_offset=100.0,
+                   temperature_scale=2.0)
+    o, d, t_max = np.array([-0.5, 0.4, 0.55]), np.array([1.0, 0.0, 0.0]), 2.0
+    n = 200_000
+    t = (np.arange(n) + 0.5) * t_max / n
+    u = o + t[:, None] * d
+    inside = np.all((u >= 0) & (u <= 1), axis=1)
+    sa = np.where(inside, 0.6 * trilinear(dens, u), 0.0)
+    tent = np.where(inside, np.prod(1 - np.abs(u - 0.5), axis=1), 0.0)
+    tau = np.cumsum(sa) * t_max / n
+    hot = (np.where(inside, trilinear(m.temperature, u), 0.0) - 100.0) * 2.0
+    temps = T_MIN * (T_MAX / T_MIN) ** (np.arange(SIZE) / (SIZE - 1))
+    table = blackbody_table()
+    colour = np.stack([np.interp(np.log(np.maximum(hot, 1.0)), np.log(temps), table[:, k]) for k in range(3)], -1)
+    colour[hot <= 100.0] = 0.0
+    assert colour[:, 0].max() > 3 * colour[:, 2].max() > 0          # a 3000 K glow: red
+    expected = ((sa * tent * np.exp(-tau))[:, None] * colour).sum(0) * t_max / n
+    _, _, light, _ = run(m, o, d, t_max, emit=True)
+    check_mean(light, expected)

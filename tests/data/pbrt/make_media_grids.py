@@ -1,5 +1,6 @@
-"""Write media_grids.pbrt: a uniformgrid and an emissive rgbgrid side by side, each in an
-interface box, with grid values drawn from a fixed seed (so the file is made again byte for byte).
+"""Write media_grids.pbrt (a uniformgrid and an emissive rgbgrid side by side, each in an
+interface box) and media_fire.pbrt (a uniformgrid glowing by its temperature grid), with grid
+values drawn from a fixed seed (so the files are made again byte for byte).
 
     python tests/data/pbrt/make_media_grids.py
 """
@@ -69,6 +70,44 @@ Material "interface"
 {BOX}AttributeEnd
 """
     (HERE / "media_grids.pbrt").write_text(text)
+    fire(rng)
+
+
+def fire(rng: np.random.Generator) -> None:
+    n = 5
+    c = (np.arange(n) + 0.5) / n
+    x, y, z = np.meshgrid(c, c, c, indexing="ij")
+    core = np.exp(-((x - 0.5) ** 2 + (y - 0.35) ** 2 + (z - 0.5) ** 2) / 0.06)
+    density = (1.5 * core * (0.7 + 0.3 * rng.random(core.shape))).transpose(2, 1, 0)
+    temperature = (1400 + 1000 * core * (0.8 + 0.2 * rng.random(core.shape))).transpose(2, 1, 0)
+    lescale = np.full((n, n, n), 0.05)
+    text = f"""# reference-spp: 1024
+# reference-seeds: 2
+# A {n}^3 uniformgrid glowing by its temperature grid (1400-2400 K, offset 0, scale 1.6: 2240-3840 K inside;
+# Lescale 0.05) over a grey floor under a dim sky; written by make_media_grids.py
+LookAt 0 0.8 -3  0 0.45 0  0 1 0
+Camera "perspective" "float fov" 35
+Sampler "independent"
+Integrator "volpath" "integer maxdepth" 6
+PixelFilter "box"
+Film "rgb" "integer xresolution" 48 "integer yresolution" 40 "string filename" "media_fire.exr"
+WorldBegin
+LightSource "infinite" "rgb L" [0.05 0.05 0.06]
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+Shape "trianglemesh" "point3 P" [-5 0 -3  5 0 -3  5 0 3  -5 0 3] "integer indices" [0 1 2 0 2 3]
+AttributeBegin
+Translate -0.5 0 -0.5
+MakeNamedMedium "fire" "string type" "uniformgrid" "integer nx" {n} "integer ny" {n} "integer nz" {n}
+  "float density" [{values(density)}]
+  "float temperature" [{values(temperature)}]
+  "float Lescale" [{values(lescale)}]
+  "float temperaturecutoff" 0 "float temperaturescale" 1.6
+  "rgb sigma_a" [1 1 1] "rgb sigma_s" [0.5 0.5 0.5]
+MediumInterface "fire" ""
+Material "interface"
+{BOX}AttributeEnd
+"""
+    (HERE / "media_fire.pbrt").write_text(text)
 
 
 if __name__ == "__main__":
