@@ -11,7 +11,7 @@ import numpy as np
 from renderer.device.machine import machine_memory
 from renderer.errors import Location, SceneError, UnsupportedError
 from renderer.media.description import KINDS, MediumDesc
-from renderer.media.presets import MEASURED
+from renderer.materials.subsurface import NAMED_MEDIA as MEASURED    # pbrt-v4's measured media, shared
 from renderer.scene.params import ParamSet
 
 #: float32 copies of a grid held at the peak of an upload (host array, device volume, its build)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from renderer.errors import Location, SceneError, UnsupportedError
-from renderer.media.presets import MEASURED
+from renderer.materials.subsurface import NAMED_MEDIA as MEASURED    # pbrt-v4's measured media, shared
 from renderer.scene.media_params import RGBGRID_LE_SCALE, read_medium
 from renderer.scene import load_description
 from renderer.scene.params import Param, ParamSet
