@@ -21,6 +21,7 @@ from renderer.camera import generate_ray
 from renderer.device.kernel_options import KERNEL_OPTIONS
 from renderer.device.scene import DeviceScene, Features, Scene
 from renderer.geometry.intersect import surface_at
+from renderer.integrators.media_path import media_functions
 from renderer.integrators.shading import load_bsdf, shading_functions
 from renderer.integrators.visibility import ray_queries
 from renderer.materials.selection import choose_material
@@ -36,7 +37,8 @@ AOV_CHANNELS = {"albedo": ("R", "G", "B"), "normal": ("X", "Y", "Z"), "depth": (
 @lru_cache(maxsize=None)
 def aov_kernel(features: Features) -> wp.Kernel:
     shading_frame, _, sample_bsdf = shading_functions(features)
-    closest = ray_queries(features).closest
+    # in scenes with media, interface surfaces are hit (the path crosses them); the AOVs look through
+    closest = media_functions(features).surface if features.media else ray_queries(features).closest
     mixes = features.mix
 
     @wp.kernel(module="unique", module_options=KERNEL_OPTIONS)

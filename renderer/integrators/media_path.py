@@ -1,7 +1,8 @@
 """What pbrt-v4's ``volpath`` adds to the path loop, for kernels of scenes with media
 (``Features.media``): the medium a path is in, crossing medium boundaries, shadow rays'
 transmittance through media and ``interface`` surfaces, and scattering at a point of a medium
-(next-event estimation with the phase function, then a phase-sampled direction).
+(next-event estimation with the phase function, then a phase-sampled direction), and the first
+surface that is not an interface (the AOVs').
 
 Weights: a path samples distances with one colour channel (renderer.media.tracking); ``beta``
 is its throughput over that channel's density and ``r_u`` the channels' densities over it, so a
@@ -20,7 +21,7 @@ from typing import NamedTuple
 import warp as wp
 
 from renderer.device.scene import Features, Scene
-from renderer.geometry.intersect import surface_at
+from renderer.geometry.intersect import Hit, surface_at
 from renderer.geometry.offsets import offset_origin, ray_epsilon
 from renderer.integrators.visibility import ray_queries
 from renderer.lights import dispatch
@@ -87,6 +88,7 @@ class Scattered:
 class MediaFunctions(NamedTuple):
     shadow: wp.Function     # (scene, o, d, t_max, medium, c, rng) -> Transmitted
     scatter: wp.Function    # (scene, p, wo, medium, c, rng, beta, r_u) -> Scattered
+    surface: wp.Function    # (scene, o, d, t_max) -> Hit: the first surface that is not an interface
 
 
 @lru_cache(maxsize=None)
@@ -160,4 +162,24 @@ def media_functions(features: Features) -> MediaFunctions:
         res.rng = state
         return res
 
-    return MediaFunctions(shadow, scatter)
+    @wp.func
+    def surface(scene: Scene, o: wp.vec3, d: wp.vec3, t_max: float) -> Hit:
+        """The closest hit that is not an interface (what the AOVs show; t from o)."""
+        origin = o
+        travelled = float(0.0)
+        hit = closest(scene, origin, d, t_max)
+        for _k in range(MAX_CROSSINGS):
+            if hit.inst < 0:
+                break
+            shape = scene.geo.inst_shape[hit.inst]
+            if not is_interface(scene, shape):
+                break
+            s = surface_at(scene.geo, hit, scene.shape_flip[shape] != 0)
+            step = offset_origin(s, d)
+            travelled += wp.dot(step - origin, d)
+            origin = step
+            hit = closest(scene, origin, d, t_max - travelled)
+        hit.t = hit.t + travelled
+        return hit
+
+    return MediaFunctions(shadow, scatter, surface)

@@ -100,3 +100,19 @@ def test_temperature_grid_glows_as_pbrts_blackbody(tmp_path):
     ref, ref_var = assert_media_matches("media_fire", mean_rtol=0.01)
     assert_variant_fails("media_fire", [('"float temperaturescale" 1.6', '"float temperaturescale" 1.4')], ref,
                          ref_var, tmp_path)
+
+
+def test_aovs_look_through_interfaces_in_scenes_with_media():
+    """With media the path kernel hits interface surfaces (to change medium); the AOVs still show
+    the first real surface: no pixel is labelled with the interface material."""
+    from renderer.device.scene import upload
+    from renderer.integrators.aov import render_aovs
+    from renderer.materials.selection import INTERFACE
+
+    desc = load_scene(DATA / "media_cube.pbrt")
+    interface = [i for i, m in enumerate(desc.materials) if m.kind == INTERFACE]
+    ds = upload(desc, "cpu")
+    assert ds.features.media and interface
+    ids = render_aovs(ds, seed=1, n_samples=2)["material"][..., 0]
+    assert not np.isin(ids, interface).any()
+    assert (ids >= 0).mean() > 0.5            # floor and wall behind the cubes
