@@ -60,7 +60,7 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
     mixes = features.mix
     dispersion = features.dispersion
     media = features.media                  # volpath's media (renderer.integrators.media_path)
-    shadow, scatter_in_medium = media_functions(features)
+    shadow, scatter_in_medium = media_functions(features).shadow, media_functions(features).scatter
 
     @wp.kernel(module="unique", module_options=KERNEL_OPTIONS)
     def integrate(scene: Scene, smp: SamplerParams, seed: int, sample_index: int, row_offset: int, max_depth: int,

@@ -35,7 +35,7 @@ def main() -> None:
     text = f"""# reference-spp: 1024
 # reference-seeds: 2
 # A uniformgrid ({nx}x{ny}x{nz}, scattering, g 0.2, transformed) and an rgbgrid with emission in two interface
-# boxes on a floor under a sky; written by make_media_grids.py
+# boxes just above a floor under a sky; written by make_media_grids.py
 LookAt 0 1.5 -4.5  0 0.5 0  0 1 0
 Camera "perspective" "float fov" 32
 Sampler "independent"
@@ -48,7 +48,7 @@ LightSource "distant" "point3 from" [-1 3 -2] "point3 to" [0 0 0] "rgb L" [2 2 2
 Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
 Shape "trianglemesh" "point3 P" [-5 0 -3  5 0 -3  5 0 3  -5 0 3] "integer indices" [0 1 2 0 2 3]
 AttributeBegin
-Translate -1.6 0 0
+Translate -1.6 0.05 0
 Rotate 20 0 1 0
 Scale 1.4 1.2 1
 MakeNamedMedium "density" "string type" "uniformgrid" "integer nx" {nx} "integer ny" {ny} "integer nz" {nz}
@@ -58,7 +58,7 @@ MediumInterface "density" ""
 Material "interface"
 {BOX}AttributeEnd
 AttributeBegin
-Translate 0.3 0 -0.2
+Translate 0.3 0.05 -0.2
 Rotate -15 0 1 0
 Scale 1.2 1.2 1.2
 MakeNamedMedium "colour" "string type" "rgbgrid" "integer nx" {nx} "integer ny" {ny} "integer nz" {nz}
@@ -84,7 +84,8 @@ def fire(rng: np.random.Generator) -> None:
     text = f"""# reference-spp: 1024
 # reference-seeds: 2
 # A {n}^3 uniformgrid glowing by its temperature grid (1400-2400 K, offset 0, scale 1.6: 2240-3840 K inside;
-# Lescale 0.05) over a grey floor under a dim sky; written by make_media_grids.py
+# Lescale 0.05) just above a grey floor (not on it: coplanar faces would make the medium ambiguous) under a dim
+# sky; written by make_media_grids.py
 LookAt 0 0.8 -3  0 0.45 0  0 1 0
 Camera "perspective" "float fov" 35
 Sampler "independent"
@@ -96,7 +97,7 @@ LightSource "infinite" "rgb L" [0.05 0.05 0.06]
 Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
 Shape "trianglemesh" "point3 P" [-5 0 -3  5 0 -3  5 0 3  -5 0 3] "integer indices" [0 1 2 0 2 3]
 AttributeBegin
-Translate -0.5 0 -0.5
+Translate -0.5 0.05 -0.5
 MakeNamedMedium "fire" "string type" "uniformgrid" "integer nx" {n} "integer ny" {n} "integer nz" {n}
   "float density" [{values(density)}]
   "float temperature" [{values(temperature)}]
