@@ -168,3 +168,21 @@ def test_nan_density_is_refused_with_its_location():
     params.add(Param("integer", "nx", [2], loc))
     with pytest.raises(SceneError, match=r"grid.pbrt:3.*NaN"):
         read_medium("uniformgrid", "g", params, np.eye(4), loc, lambda *a: None)
+
+
+def test_nanovdb_file_ships_to_cluster_workers_and_counts_in_the_fingerprint(tmp_path):
+    """A worker without the scene's folder reads the shipped copy; editing the file changes the
+    scene's fingerprint (a checkpoint of the old grid is not resumed into the new one)."""
+    from renderer.cluster.shipping import localised, scene_files
+    from renderer.io.fingerprint import scene_fingerprint
+
+    (tmp_path / "grid.nvdb").write_bytes(b"NanoVDB0 stand-in bytes")
+    s = load(tmp_path, HEAD + 'MakeNamedMedium "v" "string type" "nanovdb" "string filename" "grid.nvdb"\n')
+    files = scene_files(s)
+    assert list(files.values()) == [b"NanoVDB0 stand-in bytes"]
+    moved, names = localised(s, files, tmp_path / "worker")
+    assert moved.media[0].filename != s.media[0].filename
+    assert moved.media[0].filename.read_bytes() == b"NanoVDB0 stand-in bytes"
+    before = scene_fingerprint(s)
+    (tmp_path / "grid.nvdb").write_bytes(b"NanoVDB0 other bytes")
+    assert scene_fingerprint(s) != before
