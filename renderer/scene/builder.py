@@ -439,10 +439,13 @@ class Builder(TransformDirectives):
     def _mirrored_shapes(self, obj: ObjectDefinition) -> list[int]:
         if obj.mirrored is None:
             obj.mirrored = []
+            refs = {ref[0]: ref for ref in self.medium_refs}
             for i in obj.shapes:
                 s = self.scene.shapes[i]
                 self.scene.shapes.append(replace(s, reverse_orientation=not s.reverse_orientation))
                 obj.mirrored.append(len(self.scene.shapes) - 1)
+                if i in refs:       # its MediumInterface, resolved with the rest at the end
+                    self.medium_refs.append((len(self.scene.shapes) - 1, *refs[i][1:]))
         return obj.mirrored
 
     def _instance_placements(self, d: Directive) -> np.ndarray:

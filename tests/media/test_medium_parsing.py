@@ -186,3 +186,12 @@ def test_nanovdb_file_ships_to_cluster_workers_and_counts_in_the_fingerprint(tmp
     before = scene_fingerprint(s)
     (tmp_path / "grid.nvdb").write_bytes(b"NanoVDB0 other bytes")
     assert scene_fingerprint(s) != before
+
+
+def test_mirrored_instances_keep_their_medium_interface(tmp_path):
+    """An instance whose transform mirrors uses copies of the object's shapes: they keep its media."""
+    s = load(tmp_path, HEAD + 'ObjectBegin "blob"\nMediumInterface "ink" ""\nMaterial "interface"\nShape "sphere"\n'
+                              'ObjectEnd\nObjectInstance "blob"\nScale -1 1 1\nObjectInstance "blob"\n'
+                              'MakeNamedMedium "ink" "string type" "homogeneous"\n')
+    assert len(s.shapes) == 2
+    assert all((sh.media.inside, sh.media.outside) == (0, -1) for sh in s.shapes)
