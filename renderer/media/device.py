@@ -84,7 +84,25 @@ def _nanovdb(m: MediumDesc, device: str) -> tuple[wp.Volume, np.ndarray, np.ndar
     v = values.numpy()
     if not np.all(np.isfinite(v)) or np.any(v < 0.0):
         raise SceneError(f"{m.filename}: the density grid holds NaN or negative values", m.loc)
-    return vol, ijk.min(0) - 1.0, ijk.max(0) + 1.0, float(v.max())
+    lo, hi = _index_bounds(vol)
+    return vol, lo, hi, float(v.max())
+
+
+#: where NanoVDB's GridData keeps the grid's world bounding box (six float64 after the magic,
+#: checksum, version, flags, index, count, size, a 256-byte name and the 264-byte map)
+_WORLD_BBOX = 40 + 256 + 264
+
+
+def _index_bounds(vol: wp.Volume) -> tuple[np.ndarray, np.ndarray]:
+    """The grid's world bounding box in its index space: where pbrt-v4's medium ends."""
+    header = vol.array().numpy()[:_WORLD_BBOX + 48].copy() if vol.device.is_cpu else vol.array()[:_WORLD_BBOX + 48].numpy()
+    box = np.frombuffer(header[_WORLD_BBOX:_WORLD_BBOX + 48].tobytes(), np.float64).reshape(2, 3)
+    info = vol.get_grid_info()
+    m = np.array(info.transform_matrix, np.float64).reshape(3, 3)
+    t = np.array(info.translation, np.float64)
+    corners = np.array([[box[i, 0], box[j, 1], box[k, 2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    idx = (corners - t) @ np.linalg.inv(m).T
+    return idx.min(0), idx.max(0)
 
 
 @wp.kernel

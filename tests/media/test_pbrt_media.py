@@ -17,9 +17,10 @@ from renderer.api import load_scene, render  # noqa: E402
 from renderer.device.scene import uses_media  # noqa: E402
 
 
-def assert_media_matches(name: str) -> tuple[np.ndarray, np.ndarray]:
-    """chi < CHI and each channel mean within 4 standard errors of the difference."""
-    img, var = ours_of(name)
+def assert_media_matches(name: str, path: Path | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """chi < CHI and each channel mean within 4 standard errors of the difference (our render of
+    ``path`` if given, else of the scene in tests/data/pbrt)."""
+    img, var = ours_of(name) if path is None else ours(load_scene(path))
     ref, ref_var = reference(name)
     c = chi(img, var, ref, ref_var)
     assert c < CHI, f"{name}: chi {c:.3f}"
@@ -39,7 +40,12 @@ def assert_variant_fails(name: str, edits: list[tuple[str, str]], ref: np.ndarra
         assert old in text
         text = text.replace(old, new)
     (tmp_path / "variant.pbrt").write_text(text)
-    scene = load_scene(tmp_path / "variant.pbrt")
+    assert_variant_fails_at(tmp_path / "variant.pbrt", ref, ref_var)
+
+
+def assert_variant_fails_at(path: Path, ref: np.ndarray, ref_var: np.ndarray) -> None:
+    scene = load_scene(path)
+    name = path.stem
     a, b = render(scene, spp=256, seed=21), render(scene, spp=256, seed=22)
     img, var = 0.5 * (a + b), 0.25 * (a - b) ** 2
     se = np.sqrt((var + ref_var).sum((0, 1))) / (img.shape[0] * img.shape[1])
@@ -112,3 +118,18 @@ def test_aovs_look_through_interfaces_in_scenes_with_media():
     ids = render_aovs(ds, seed=1, n_samples=2)["material"][..., 0]
     assert not np.isin(ids, interface).any()
     assert (ids >= 0).mean() > 0.5            # floor and wall behind the cubes
+
+
+def test_nanovdb_grid(tmp_path):
+    """The grid file is made by make_media_vdb.py (as for pbrt's reference), here in tmp_path."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("make_media_vdb", DATA / "make_media_vdb.py")
+    maker = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(maker)
+    maker.write_grid(tmp_path / "media_vdb.nvdb")
+    (tmp_path / "media_vdb.pbrt").write_text((DATA / "media_vdb.pbrt").read_text())
+    ref, ref_var = assert_media_matches("media_vdb", tmp_path / "media_vdb.pbrt")
+    text = (tmp_path / "media_vdb.pbrt").read_text()
+    (tmp_path / "media_vdb.pbrt").write_text(text.replace('"rgb sigma_s" [4 4 4]', '"rgb sigma_s" [2 2 2]'))
+    assert_variant_fails_at(tmp_path / "media_vdb.pbrt", ref, ref_var)
