@@ -1,0 +1,186 @@
+"""The wavefront integrator (pbrt-v4's GPU design): the megakernel's path loop cut into small
+kernels that each do one step for every path of a launch, with the paths' state in memory
+(:class:`renderer.integrators.path_state.PathBuffers`) between them.
+
+Per launch: ``start`` (camera rays, the sampler's start), then per depth ``intersect`` (closest
+hits), ``hits`` (light that escaped or was hit, the end at the maximum depth, mixes resolved to
+the material that shades), one ``shade_<kind>`` per material kind of the scene (a vertex of that
+kind: its BSDF, dispersion, subsurface, the light sample's shadow ray and the BSDF sample that
+continues the path), ``shadow`` (the shadow rays, and what they let through), until no path goes
+on; then ``finish`` (the film, dropped samples and ray counts as the megakernel writes them).
+
+Each step calls the functions the megakernel calls (:mod:`renderer.integrators.vertex`), in the
+same order per path, so the CPU image is the megakernel's bit for bit. A kernel holds only its
+step: on a GPU the BVH query, the light sampling and each material's code no longer share one
+thread's registers. A shading kernel runs over every path and returns at once for the paths of
+other kinds (a kind array, not a queue: see docs/gpu.md, "Wavefront")."""
+from __future__ import annotations
+
+import dataclasses
+from functools import lru_cache
+
+import warp as wp
+
+from renderer.device.kernel_options import KERNEL_OPTIONS
+from renderer.device.scene import Features, Scene
+from renderer.geometry.intersect import surface_at
+from renderer.integrators.path_state import PathBuffers, load_path, path_buffers, store_path, store_shadow
+from renderer.integrators.vertex import path_functions, scatter_function
+from renderer.integrators.visibility import ray_queries
+from renderer.materials import kind_id
+from renderer.sampling.samplers import PixelSample, SamplerParams
+
+
+def _kernel(f) -> wp.Kernel:
+    """A render kernel in a module of its own (compiled, cached and measured alone)."""
+    return wp.kernel(f, module="unique", module_options=KERNEL_OPTIONS)
+
+
+@lru_cache(maxsize=None)
+def start_kernel(features: Features, independent: bool) -> wp.Kernel:
+    start = path_functions(features, independent).start
+
+    def start_paths(scene: Scene, smp: SamplerParams, seed: int, sample_index: int, row_offset: int,
+                    paths: PathBuffers):
+        i = wp.tid()
+        begun = start(scene, smp, seed, sample_index, row_offset * scene.cam.width + i)
+        store_path(paths, i, begun.path)
+        if wp.static(not independent):
+            paths.sample[i] = begun.sample
+        paths.active[i] = 1
+        paths.shadow_on[i] = 0
+
+    return _kernel(start_paths)
+
+
+@lru_cache(maxsize=None)
+def intersect_kernel(features: Features) -> wp.Kernel:
+    closest = ray_queries(features).closest
+
+    def intersect(scene: Scene, paths: PathBuffers):
+        i = wp.tid()
+        if paths.active[i] == 0:
+            return
+        paths.hit[i] = closest(scene, paths.o[i], paths.d[i], 1.0e30)
+        paths.rays[i] = paths.rays[i] + 1
+
+    return _kernel(intersect)
+
+
+@lru_cache(maxsize=None)
+def hits_kernel(features: Features) -> wp.Kernel:
+    arrive = path_functions(features, False).arrive     # does not draw numbers: one variant serves both
+
+    def hits(scene: Scene, paths: PathBuffers, max_depth: int):
+        i = wp.tid()
+        if paths.active[i] == 0:
+            return
+        ar = arrive(scene, load_path(paths, i), paths.hit[i], max_depth)
+        paths.L[i] = ar.path.L
+        if not ar.shade:
+            paths.active[i] = 0
+            return
+        paths.material[i] = ar.m
+        paths.kind[i] = scene.mat.kind[ar.m]
+
+    return _kernel(hits)
+
+
+@lru_cache(maxsize=None)
+def shade_kernel(features: Features, independent: bool, kind: str) -> wp.Kernel:
+    scatter = scatter_function(features, independent, kind)
+    this_kind = kind_id(kind)
+
+    def shade(scene: Scene, smp: SamplerParams, paths: PathBuffers, rr_depth: int):
+        i = wp.tid()
+        if paths.active[i] == 0 or paths.kind[i] != wp.static(this_kind):
+            return
+        hit = paths.hit[i]
+        s = surface_at(scene.geo, hit, scene.shape_flip[scene.geo.inst_shape[hit.inst]] != 0)
+        ps = PixelSample()
+        if wp.static(not independent):
+            ps = paths.sample[i]
+        sc = scatter(scene, smp, ps, load_path(paths, i), hit, s, paths.material[i], rr_depth)
+        store_path(paths, i, sc.path)
+        store_shadow(paths, i, sc.shadow)
+        if sc.alive:
+            wp.atomic_add(paths.alive, 0, 1)
+        else:
+            paths.active[i] = 0
+
+    return _kernel(shade)
+
+
+@lru_cache(maxsize=None)
+def shadow_kernel(features: Features) -> wp.Kernel:
+    blocked = ray_queries(features).blocked
+
+    def shadow(scene: Scene, paths: PathBuffers):
+        i = wp.tid()
+        if paths.shadow_on[i] == 0:
+            return
+        paths.shadow_on[i] = 0
+        paths.rays[i] = paths.rays[i] + 1
+        if not blocked(scene, paths.shadow_o[i], paths.shadow_d[i], paths.shadow_t[i]):
+            paths.L[i] = paths.L[i] + paths.shadow_L[i]
+
+    return _kernel(shadow)
+
+
+@lru_cache(maxsize=None)
+def finish_kernel(features: Features) -> wp.Kernel:
+    record = path_functions(features, False).record
+
+    def finish(scene: Scene, paths: PathBuffers, row_offset: int, film: wp.array(dtype=wp.vec3d),
+               bad_samples: wp.array(dtype=int), ray_count: wp.array(dtype=wp.int64)):
+        i = wp.tid()
+        record(scene, load_path(paths, i), row_offset * scene.cam.width + i, film, bad_samples, ray_count)
+
+    return _kernel(finish)
+
+
+def wavefront_kernels(features: Features, independent: bool) -> dict[str, wp.Kernel]:
+    """By name, in launch order: the kernels of one wavefront pass for a scene of ``features``."""
+    kernels = {"start": start_kernel(features, independent), "intersect": intersect_kernel(features),
+               "hits": hits_kernel(features)}
+    for kind in features.materials:
+        kernels[f"shade_{kind}"] = shade_kernel(features, independent, kind)
+    kernels["shadow"] = shadow_kernel(features)
+    kernels["finish"] = finish_kernel(features)
+    return kernels
+
+
+@dataclasses.dataclass
+class Wavefront:
+    """Runs wavefront passes over row chunks: one set of path buffers per worker (``slots``), each
+    sized to the largest chunk (``max_paths``)."""
+
+    kernels: dict[str, wp.Kernel]
+    independent: bool
+    max_paths: int
+    slots: int
+    device: str
+
+    def __post_init__(self) -> None:
+        self.buffers = [path_buffers(self.max_paths, not self.independent, self.device) for _ in range(self.slots)]
+        self.shaders = [k for name, k in self.kernels.items() if name.startswith("shade_")]
+
+    def launch(self, slot: int, scene: Scene, smp: SamplerParams, seed: int, sample_index: int, first_row: int,
+               rows: int, max_depth: int, rr_depth: int, film: wp.array, bad_samples: wp.array,
+               ray_count: wp.array) -> None:
+        """One sample for every pixel of rows ``first_row ...``, added as the megakernel adds it.
+        The host reads one counter per depth to stop when no path goes on (a path's depth only
+        grows, so this ends by ``max_depth``)."""
+        k, paths, dev = self.kernels, self.buffers[slot], self.device
+        n = rows * scene.cam.width
+        wp.launch(k["start"], dim=n, inputs=[scene, smp, seed, sample_index, first_row, paths], device=dev)
+        while True:
+            wp.launch(k["intersect"], dim=n, inputs=[scene, paths], device=dev)
+            wp.launch(k["hits"], dim=n, inputs=[scene, paths, max_depth], device=dev)
+            paths.alive.zero_()
+            for shade in self.shaders:
+                wp.launch(shade, dim=n, inputs=[scene, smp, paths, rr_depth], device=dev)
+            wp.launch(k["shadow"], dim=n, inputs=[scene, paths], device=dev)
+            if int(paths.alive.numpy()[0]) == 0:
+                break
+        wp.launch(k["finish"], dim=n, inputs=[scene, paths, first_row, film, bad_samples, ray_count], device=dev)
