@@ -64,19 +64,21 @@ class PathBuffers:
     active: wp.array(dtype=int)             # 1 while the path goes on
     hit: wp.array(dtype=Hit)                # the last intersection
     material: wp.array(dtype=int)           # the hit's material, mixes resolved
-    kind: wp.array(dtype=int)               # that material's kind: which shading kernel takes the path
+    queue_of_kind: wp.array(dtype=int)      # per material kind id, the shading queue that takes its paths
+    queued: wp.array(dtype=int)             # per queue, the paths in it
+    queue: wp.array2d(dtype=int)            # per queue, the indices of its paths
     shadow_o: wp.array(dtype=wp.vec3)
     shadow_d: wp.array(dtype=wp.vec3)
     shadow_t: wp.array(dtype=float)
     shadow_on: wp.array(dtype=int)          # 1: a shadow ray is pending
     shadow_L: wp.array(dtype=wp.vec3)
-    alive: wp.array(dtype=int)              # [0]: paths that go on after this depth's shading
 
 
-def path_buffers(n: int, sampled: bool, device: str) -> PathBuffers:
+def path_buffers(n: int, sampled: bool, queue_of_kind: list[int], device: str) -> PathBuffers:
     """Buffers for ``n`` paths; ``sampled``: the scene's sampler (not the independent stream) draws
-    the numbers, so each path keeps its pixel sample."""
-    def a(dtype, count: int = n) -> wp.array:
+    the numbers, so each path keeps its pixel sample; ``queue_of_kind``: per material kind id, its
+    shading queue (-1: none)."""
+    def a(dtype, count: int | tuple[int, int] = n) -> wp.array:
         return wp.zeros(count, dtype=dtype, device=device)
 
     b = PathBuffers()
@@ -84,13 +86,16 @@ def path_buffers(n: int, sampled: bool, device: str) -> PathBuffers:
         setattr(b, name, a(wp.vec3))
     for name in ("eta_scale", "prev_pdf", "hero", "weight", "shadow_t"):
         setattr(b, name, a(float))
-    for name in ("depth", "rays", "active", "material", "kind", "shadow_on"):
+    for name in ("depth", "rays", "active", "material", "shadow_on"):
         setattr(b, name, a(int))
     b.prev_specular = a(wp.bool)
     b.rng = a(wp.uint32)
     b.sample = a(PixelSample, n if sampled else 1)
     b.hit = a(Hit)
-    b.alive = a(int, 1)
+    b.queue_of_kind = wp.array(queue_of_kind, dtype=int, device=device)
+    queues = max(queue_of_kind) + 1
+    b.queued = a(int, queues)
+    b.queue = a(int, (queues, n))
     return b
 
 

@@ -27,7 +27,7 @@ from renderer.geometry.intersect import surface_at
 from renderer.integrators.path_state import PathBuffers, load_path, path_buffers, store_path, store_shadow
 from renderer.integrators.vertex import path_functions, scatter_function
 from renderer.integrators.visibility import ray_queries
-from renderer.materials import kind_id
+from renderer.materials import REGISTRY, kind_id
 from renderer.sampling.samplers import PixelSample, SamplerParams
 
 
@@ -81,7 +81,8 @@ def hits_kernel(features: Features) -> wp.Kernel:
             paths.active[i] = 0
             return
         paths.material[i] = ar.m
-        paths.kind[i] = scene.mat.kind[ar.m]
+        q = paths.queue_of_kind[scene.mat.kind[ar.m]]
+        paths.queue[q, wp.atomic_add(paths.queued, q, 1)] = i
 
     return _kernel(hits)
 
@@ -89,12 +90,10 @@ def hits_kernel(features: Features) -> wp.Kernel:
 @lru_cache(maxsize=None)
 def shade_kernel(features: Features, independent: bool, kind: str) -> wp.Kernel:
     scatter = scatter_function(features, independent, kind)
-    this_kind = kind_id(kind)
+    queue = features.materials.index(kind)
 
     def shade(scene: Scene, smp: SamplerParams, paths: PathBuffers, rr_depth: int):
-        i = wp.tid()
-        if paths.active[i] == 0 or paths.kind[i] != wp.static(this_kind):
-            return
+        i = paths.queue[queue, wp.tid()]
         hit = paths.hit[i]
         s = surface_at(scene.geo, hit, scene.shape_flip[scene.geo.inst_shape[hit.inst]] != 0)
         ps = PixelSample()
@@ -103,9 +102,7 @@ def shade_kernel(features: Features, independent: bool, kind: str) -> wp.Kernel:
         sc = scatter(scene, smp, ps, load_path(paths, i), hit, s, paths.material[i], rr_depth)
         store_path(paths, i, sc.path)
         store_shadow(paths, i, sc.shadow)
-        if sc.alive:
-            wp.atomic_add(paths.alive, 0, 1)
-        else:
+        if not sc.alive:
             paths.active[i] = 0
 
     return _kernel(shade)
@@ -162,25 +159,33 @@ class Wavefront:
     device: str
 
     def __post_init__(self) -> None:
-        self.buffers = [path_buffers(self.max_paths, not self.independent, self.device) for _ in range(self.slots)]
-        self.shaders = [k for name, k in self.kernels.items() if name.startswith("shade_")]
+        kinds = [name.removeprefix("shade_") for name in self.kernels if name.startswith("shade_")]
+        queue_of_kind = [-1] * len(REGISTRY)
+        for q, kind in enumerate(kinds):
+            queue_of_kind[kind_id(kind)] = q
+        self.buffers = [path_buffers(self.max_paths, not self.independent, queue_of_kind, self.device)
+                        for _ in range(self.slots)]
+        self.shaders = [self.kernels[f"shade_{kind}"] for kind in kinds]
 
     def launch(self, slot: int, scene: Scene, smp: SamplerParams, seed: int, sample_index: int, first_row: int,
                rows: int, max_depth: int, rr_depth: int, film: wp.array, bad_samples: wp.array,
                ray_count: wp.array) -> None:
         """One sample for every pixel of rows ``first_row ...``, added as the megakernel adds it.
-        The host reads one counter per depth to stop when no path goes on (a path's depth only
-        grows, so this ends by ``max_depth``)."""
+        Per depth the host reads the queues' lengths (one copy from the device) and launches each
+        shading kernel over its queue; no queued path ends the loop (a path's depth only grows, so
+        this happens by ``max_depth``)."""
         k, paths, dev = self.kernels, self.buffers[slot], self.device
         n = rows * scene.cam.width
         wp.launch(k["start"], dim=n, inputs=[scene, smp, seed, sample_index, first_row, paths], device=dev)
         while True:
             wp.launch(k["intersect"], dim=n, inputs=[scene, paths], device=dev)
+            paths.queued.zero_()
             wp.launch(k["hits"], dim=n, inputs=[scene, paths, max_depth], device=dev)
-            paths.alive.zero_()
-            for shade in self.shaders:
-                wp.launch(shade, dim=n, inputs=[scene, smp, paths, rr_depth], device=dev)
-            wp.launch(k["shadow"], dim=n, inputs=[scene, paths], device=dev)
-            if int(paths.alive.numpy()[0]) == 0:
+            queued = paths.queued.numpy()
+            if not queued.any():
                 break
+            for shade, count in zip(self.shaders, queued):
+                if count > 0:
+                    wp.launch(shade, dim=int(count), inputs=[scene, smp, paths, rr_depth], device=dev)
+            wp.launch(k["shadow"], dim=n, inputs=[scene, paths], device=dev)
         wp.launch(k["finish"], dim=n, inputs=[scene, paths, first_row, film, bad_samples, ray_count], device=dev)
