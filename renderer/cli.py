@@ -376,6 +376,9 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
             _check_writable(path, what)
     if args.ray is None and (args.ray_chunk or args.ray_workers):
         raise RenderError("--ray-chunk and --ray-workers need --ray")
+    if args.ray is not None and args.wavefront is not None:
+        raise RenderError("--wavefront/--no-wavefront choose the integrator of one process; Ray workers use their "
+                          "device's (the wavefront on a GPU, the megakernel on CPUs: the same image)")
     display = None
     if args.display_server:             # before the upload, so a wrong address fails at once
         from renderer.io.display import DisplayServer
