@@ -61,23 +61,26 @@ class PathBuffers:
     rays: wp.array(dtype=int)
     rng: wp.array(dtype=wp.uint32)
     sample: wp.array(dtype=PixelSample)     # the pixel sample the scene's sampler draws from (unused: 1 entry)
-    active: wp.array(dtype=int)             # 1 while the path goes on
     hit: wp.array(dtype=Hit)                # the last intersection
     material: wp.array(dtype=int)           # the hit's material, mixes resolved
-    queue_of_kind: wp.array(dtype=int)      # per material kind id, the shading queue that takes its paths
-    queued: wp.array(dtype=int)             # per queue, the paths in it
-    queue: wp.array2d(dtype=int)            # per queue, the indices of its paths
     shadow_o: wp.array(dtype=wp.vec3)
     shadow_d: wp.array(dtype=wp.vec3)
     shadow_t: wp.array(dtype=float)
-    shadow_on: wp.array(dtype=int)          # 1: a shadow ray is pending
     shadow_L: wp.array(dtype=wp.vec3)
+    queue: wp.array2d(dtype=int)            # per queue (RAYS, SHADOWS, then one per material kind), path indices
+    queued: wp.array(dtype=int)             # per queue, the paths pushed into it
+    queue_of_kind: wp.array(dtype=int)      # per material kind id, its shading queue
+
+
+#: The queues of :class:`PathBuffers`: paths whose next ray is to be traced, paths with a shadow
+#: ray to trace, then one shading queue per material kind of the scene.
+RAYS, SHADOWS, FIRST_KIND = 0, 1, 2
 
 
 def path_buffers(n: int, sampled: bool, queue_of_kind: list[int], device: str) -> PathBuffers:
     """Buffers for ``n`` paths; ``sampled``: the scene's sampler (not the independent stream) draws
     the numbers, so each path keeps its pixel sample; ``queue_of_kind``: per material kind id, its
-    shading queue (-1: none)."""
+    shading queue (from FIRST_KIND on; -1: none)."""
     def a(dtype, count: int | tuple[int, int] = n) -> wp.array:
         return wp.zeros(count, dtype=dtype, device=device)
 
@@ -86,14 +89,14 @@ def path_buffers(n: int, sampled: bool, queue_of_kind: list[int], device: str) -
         setattr(b, name, a(wp.vec3))
     for name in ("eta_scale", "prev_pdf", "hero", "weight", "shadow_t"):
         setattr(b, name, a(float))
-    for name in ("depth", "rays", "active", "material", "shadow_on"):
+    for name in ("depth", "rays", "material"):
         setattr(b, name, a(int))
     b.prev_specular = a(wp.bool)
     b.rng = a(wp.uint32)
     b.sample = a(PixelSample, n if sampled else 1)
     b.hit = a(Hit)
     b.queue_of_kind = wp.array(queue_of_kind, dtype=int, device=device)
-    queues = max(queue_of_kind) + 1
+    queues = max(FIRST_KIND, max(queue_of_kind) + 1)
     b.queued = a(int, queues)
     b.queue = a(int, (queues, n))
     return b
@@ -136,10 +139,16 @@ def store_path(b: PathBuffers, i: int, st: PathState):
 
 
 @wp.func
-def store_shadow(b: PathBuffers, i: int, sh: ShadowRay):
-    if sh.on:
-        b.shadow_on[i] = 1
-        b.shadow_t[i] = sh.t_max
-        b.shadow_o[i] = sh.o
-        b.shadow_d[i] = sh.d
-        b.shadow_L[i] = sh.L
+def push(b: PathBuffers, queue: int, i: int):
+    """Path ``i`` into ``queue`` (an atomic counter hands out the places; their order does not
+    matter, as every path's result is its own)."""
+    b.queue[queue, wp.atomic_add(b.queued, queue, 1)] = i
+
+
+@wp.func
+def push_shadow(b: PathBuffers, i: int, sh: ShadowRay):
+    b.shadow_t[i] = sh.t_max
+    b.shadow_o[i] = sh.o
+    b.shadow_d[i] = sh.d
+    b.shadow_L[i] = sh.L
+    push(b, SHADOWS, i)

@@ -12,8 +12,11 @@ on; then ``finish`` (the film, dropped samples and ray counts as the megakernel 
 Each step calls the functions the megakernel calls (:mod:`renderer.integrators.vertex`), in the
 same order per path, so the CPU image is the megakernel's bit for bit. A kernel holds only its
 step: on a GPU the BVH query, the light sampling and each material's code no longer share one
-thread's registers. A shading kernel runs over every path and returns at once for the paths of
-other kinds (a kind array, not a queue: see docs/gpu.md, "Wavefront")."""
+thread's registers. Every kernel after ``start`` runs over a queue of path indices (pbrt-v4's
+ray queues): ``hits`` pushes each path that goes on into its material kind's queue, so a GPU warp
+shades one material; shading pushes the paths that go on and the shadow rays into theirs, so
+finished paths cost no thread. The order within a queue does not matter, as every path's result
+is its own."""
 from __future__ import annotations
 
 import dataclasses
@@ -24,7 +27,8 @@ import warp as wp
 from renderer.device.kernel_options import KERNEL_OPTIONS
 from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import surface_at
-from renderer.integrators.path_state import PathBuffers, load_path, path_buffers, store_path, store_shadow
+from renderer.integrators.path_state import (FIRST_KIND, RAYS, SHADOWS, PathBuffers, load_path, path_buffers, push,
+                                             push_shadow, store_path)
 from renderer.integrators.vertex import path_functions, scatter_function
 from renderer.integrators.visibility import ray_queries
 from renderer.materials import REGISTRY, kind_id
@@ -47,8 +51,7 @@ def start_kernel(features: Features, independent: bool) -> wp.Kernel:
         store_path(paths, i, begun.path)
         if wp.static(not independent):
             paths.sample[i] = begun.sample
-        paths.active[i] = 1
-        paths.shadow_on[i] = 0
+        paths.queue[RAYS, i] = i        # every path traces its camera ray (the host knows the count)
 
     return _kernel(start_paths)
 
@@ -58,9 +61,7 @@ def intersect_kernel(features: Features) -> wp.Kernel:
     closest = ray_queries(features).closest
 
     def intersect(scene: Scene, paths: PathBuffers):
-        i = wp.tid()
-        if paths.active[i] == 0:
-            return
+        i = paths.queue[RAYS, wp.tid()]
         paths.hit[i] = closest(scene, paths.o[i], paths.d[i], 1.0e30)
         paths.rays[i] = paths.rays[i] + 1
 
@@ -72,17 +73,12 @@ def hits_kernel(features: Features) -> wp.Kernel:
     arrive = path_functions(features, False).arrive     # does not draw numbers: one variant serves both
 
     def hits(scene: Scene, paths: PathBuffers, max_depth: int):
-        i = wp.tid()
-        if paths.active[i] == 0:
-            return
+        i = paths.queue[RAYS, wp.tid()]
         ar = arrive(scene, load_path(paths, i), paths.hit[i], max_depth)
         paths.L[i] = ar.path.L
-        if not ar.shade:
-            paths.active[i] = 0
-            return
-        paths.material[i] = ar.m
-        q = paths.queue_of_kind[scene.mat.kind[ar.m]]
-        paths.queue[q, wp.atomic_add(paths.queued, q, 1)] = i
+        if ar.shade:
+            paths.material[i] = ar.m
+            push(paths, paths.queue_of_kind[scene.mat.kind[ar.m]], i)
 
     return _kernel(hits)
 
@@ -90,7 +86,7 @@ def hits_kernel(features: Features) -> wp.Kernel:
 @lru_cache(maxsize=None)
 def shade_kernel(features: Features, independent: bool, kind: str) -> wp.Kernel:
     scatter = scatter_function(features, independent, kind)
-    queue = features.materials.index(kind)
+    queue = FIRST_KIND + features.materials.index(kind)
 
     def shade(scene: Scene, smp: SamplerParams, paths: PathBuffers, rr_depth: int):
         i = paths.queue[queue, wp.tid()]
@@ -101,9 +97,10 @@ def shade_kernel(features: Features, independent: bool, kind: str) -> wp.Kernel:
             ps = paths.sample[i]
         sc = scatter(scene, smp, ps, load_path(paths, i), hit, s, paths.material[i], rr_depth)
         store_path(paths, i, sc.path)
-        store_shadow(paths, i, sc.shadow)
-        if not sc.alive:
-            paths.active[i] = 0
+        if sc.shadow.on:
+            push_shadow(paths, i, sc.shadow)
+        if sc.alive:
+            push(paths, RAYS, i)
 
     return _kernel(shade)
 
@@ -113,10 +110,7 @@ def shadow_kernel(features: Features) -> wp.Kernel:
     blocked = ray_queries(features).blocked
 
     def shadow(scene: Scene, paths: PathBuffers):
-        i = wp.tid()
-        if paths.shadow_on[i] == 0:
-            return
-        paths.shadow_on[i] = 0
+        i = paths.queue[SHADOWS, wp.tid()]
         paths.rays[i] = paths.rays[i] + 1
         if not blocked(scene, paths.shadow_o[i], paths.shadow_d[i], paths.shadow_t[i]):
             paths.L[i] = paths.L[i] + paths.shadow_L[i]
@@ -162,7 +156,7 @@ class Wavefront:
         kinds = [name.removeprefix("shade_") for name in self.kernels if name.startswith("shade_")]
         queue_of_kind = [-1] * len(REGISTRY)
         for q, kind in enumerate(kinds):
-            queue_of_kind[kind_id(kind)] = q
+            queue_of_kind[kind_id(kind)] = FIRST_KIND + q
         self.buffers = [path_buffers(self.max_paths, not self.independent, queue_of_kind, self.device)
                         for _ in range(self.slots)]
         self.shaders = [self.kernels[f"shade_{kind}"] for kind in kinds]
@@ -171,21 +165,24 @@ class Wavefront:
                rows: int, max_depth: int, rr_depth: int, film: wp.array, bad_samples: wp.array,
                ray_count: wp.array) -> None:
         """One sample for every pixel of rows ``first_row ...``, added as the megakernel adds it.
-        Per depth the host reads the queues' lengths (one copy from the device) and launches each
-        shading kernel over its queue; no queued path ends the loop (a path's depth only grows, so
-        this happens by ``max_depth``)."""
+        Every kernel after ``start`` runs over a queue, whose length the host reads (twice per
+        depth: after ``hits``, the shading queues; after shading, the rays and shadow rays to
+        trace); the loop ends when no path is left to trace, by ``max_depth`` at the latest."""
         k, paths, dev = self.kernels, self.buffers[slot], self.device
         n = rows * scene.cam.width
         wp.launch(k["start"], dim=n, inputs=[scene, smp, seed, sample_index, first_row, paths], device=dev)
-        while True:
-            wp.launch(k["intersect"], dim=n, inputs=[scene, paths], device=dev)
+        tracing = n
+        while tracing > 0:
+            wp.launch(k["intersect"], dim=tracing, inputs=[scene, paths], device=dev)
             paths.queued.zero_()
-            wp.launch(k["hits"], dim=n, inputs=[scene, paths, max_depth], device=dev)
-            queued = paths.queued.numpy()
-            if not queued.any():
-                break
-            for shade, count in zip(self.shaders, queued):
+            wp.launch(k["hits"], dim=tracing, inputs=[scene, paths, max_depth], device=dev)
+            queued = paths.queued.numpy().copy()
+            paths.queued.zero_()
+            for shade, count in zip(self.shaders, queued[FIRST_KIND:]):
                 if count > 0:
                     wp.launch(shade, dim=int(count), inputs=[scene, smp, paths, rr_depth], device=dev)
-            wp.launch(k["shadow"], dim=n, inputs=[scene, paths], device=dev)
+            queued = paths.queued.numpy()
+            tracing, shadows = int(queued[RAYS]), int(queued[SHADOWS])
+            if shadows > 0:
+                wp.launch(k["shadow"], dim=shadows, inputs=[scene, paths], device=dev)
         wp.launch(k["finish"], dim=n, inputs=[scene, paths, first_row, film, bad_samples, ray_count], device=dev)
