@@ -30,6 +30,7 @@ CASES = [
     (ROOT / "scenes" / "sand_patch.pbrt", None, 32, 16, 2),           # disney with subsurface
     (ROOT / "scenes" / "ar_coating.pbrt", None, 32, 18, 2),           # thin film
     (PBRT / "v3_materials_upgraded.pbrt", "halton", 32, 24, 2),       # coatings, a bump map, a mix
+    (PBRT / "subsurface_skin.pbrt", None, 24, 24, 2),                 # pbrt-v4's subsurface, spectral body
 ]
 
 
@@ -44,7 +45,7 @@ def _render(case, wavefront: bool, threads: int = 1) -> tuple[np.ndarray, Render
 def test_cases_cover_the_features():
     features = [upload(load_scene(c[0]), "cpu", 8, 8).features for c in CASES]
     kinds = {k for f in features for k in f.materials}
-    assert {"diffuse", "dielectric", "conductor", "thinfilm", "disney", "coateddiffuse"} <= kinds, kinds
+    assert {"diffuse", "dielectric", "conductor", "thinfilm", "disney", "coateddiffuse", "subsurface"} <= kinds, kinds
     lights = {k for f in features for k in f.lights}
     assert {"infinite", "distant", "diffuse"} <= lights, lights
     for flag in ("mix", "alpha", "dispersion", "subsurface", "bump"):
