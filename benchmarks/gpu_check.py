@@ -86,8 +86,8 @@ def compile_section(device: str, paths: list[Path]) -> list[str]:
         desc = load_scene(path)
         settings = settings_for(desc)
         ds = upload(desc, "cpu", 8, 8, thin_film=settings.thin_film)
-        rows = compile_kernels(render_kernels(ds.features, settings.sampler.name == "independent"), [arch],
-                               lambda m: print(m, file=sys.stderr, flush=True))
+        kernels = render_kernels(ds.features, settings.sampler.name == "independent", wavefront=True)
+        rows = compile_kernels(kernels, [arch], lambda m: print(m, file=sys.stderr, flush=True))
         out += [f"### {path.name}", "", table(rows), ""]
     return out
 

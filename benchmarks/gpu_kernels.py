@@ -3,7 +3,11 @@ with every feature at once (every material, light, bump, cut-outs, mixes, subsur
 dispersion): ``--compile-only``'s table from a cold kernel cache, so the compile seconds are
 NVRTC's own. No GPU needed.
 
-    python benchmarks/gpu_kernels.py [--arch sm_90] [--scenes scenes/demo.pbrt ...] [--aov] [--out out/gpu_kernels.md]
+    python benchmarks/gpu_kernels.py [--arch sm_90] [--scenes scenes/demo.pbrt ...] [--aov] [--megakernel]
+                                     [--out out/gpu_kernels.md]
+
+A CUDA render launches the wavefront's kernels; ``--megakernel`` compiles the one-kernel
+integrator instead (the CPU's default), for the comparison in docs/gpu.md.
 
 Scenes with a recipe need their assets (``assets-gen recipe SCENE``) first."""
 from __future__ import annotations
@@ -45,6 +49,7 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=ROOT / "out" / "gpu_kernels.md")
     ap.add_argument("--cache", type=Path, help="kernel cache to fill (default: a new, empty one)")
     ap.add_argument("--aov", action="store_true", help="also the AOV kernel (what --aov and --denoise launch)")
+    ap.add_argument("--megakernel", action="store_true", help="the megakernel instead of the wavefront's kernels")
     a = ap.parse_args()
     os.environ["WARP_CACHE_PATH"] = str(a.cache or tempfile.mkdtemp(prefix="gpu_kernels_"))
     from renderer.device.cuda_compile import compile_kernels, parse_archs, table
@@ -58,7 +63,8 @@ def main() -> None:
              "compiles once and shows as cached the second time)", ""]
     for name, features, independent in jobs:
         say(f"== {name}: {features}")
-        rows = compile_kernels(render_kernels(features, independent, aov=a.aov), archs, say)
+        rows = compile_kernels(render_kernels(features, independent, aov=a.aov, wavefront=not a.megakernel), archs,
+                               say)
         parts += [f"### {name}", "", table(rows), ""]
         a.out.parent.mkdir(parents=True, exist_ok=True)
         a.out.write_text("\n".join(parts) + "\n")

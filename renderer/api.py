@@ -31,14 +31,17 @@ def load_scene(path: str | Path) -> SceneDescription:
 
 
 def open_session(scene: SceneDescription, settings: RenderSettings, device: str = "cpu", threads: int | None = None,
-                 resume: str | Path | None = None, memory_limit_gb: float | None = None) -> RenderSession:
+                 resume: str | Path | None = None, memory_limit_gb: float | None = None,
+                 wavefront: bool | None = None) -> RenderSession:
     """Upload ``scene`` and get a session ready to render passes; with ``resume``, continue the
     checkpoint at that path (refused if it was made from another scene or with other settings).
     A scene estimated to need more than ``memory_limit_gb`` (default: this machine's memory) is
-    refused before anything is allocated. ``render`` and the ``render`` command both start here."""
+    refused before anything is allocated. ``wavefront``: the wavefront integrator (True) or the
+    megakernel (False) instead of the device's default (the wavefront on CUDA); the same image.
+    ``render`` and the ``render`` command both start here."""
     limit = None if memory_limit_gb is None else int(memory_limit_gb * 2**30)
     check_fits(scene, settings.width, settings.height, limit)
-    session = RenderSession(scene, settings, device=device, threads=threads)
+    session = RenderSession(scene, settings, device=device, threads=threads, wavefront=wavefront)
     if resume is not None:
         session.restore(load_checkpoint(resume), source=str(resume))
     return session
@@ -49,7 +52,8 @@ def render(scene: SceneDescription, spp: int | None = None, device: str = "cpu",
            nee: bool = True, rr_depth: int | None = None, threads: int | None = None, time_limit: float | None = None,
            progress: Callable[[int, int], None] | None = None, stats: RenderStats | None = None,
            thin_film: str | None = None, sampler: str | None = None,
-           cluster: "Cluster | str | None" = None, multiscatter: bool = False) -> np.ndarray:
+           cluster: "Cluster | str | None" = None, multiscatter: bool = False,
+           wavefront: bool | None = None) -> np.ndarray:
     """Render and return linear RGB as float32 (H, W, 3). ``spp``, ``seed``, ``max_depth`` and the
     resolution default to the scene file's values. ``progress(done, total)`` runs after every pass.
     ``thin_film``: the thinfilm material's colour mode, ``rgb3``, ``spectral:N`` (default spectral:32)
@@ -59,7 +63,9 @@ def render(scene: SceneDescription, spp: int | None = None, device: str = "cpu",
     ``cluster``: render on Ray (a :class:`renderer.cluster.Cluster`, or an address: "local", "auto",
     "ray://host:port"); the image is bit-identical to the one-process render.
     ``multiscatter``: count the bounces between microfacets on every rough ``dielectric``, ``conductor``
-    and ``thinfilm`` (as if each had ``"bool multiscatter" true``; docs/materials.md)."""
+    and ``thinfilm`` (as if each had ``"bool multiscatter" true``; docs/materials.md).
+    ``wavefront``: True runs the wavefront integrator, False the megakernel; None (default) the
+    wavefront on CUDA and the megakernel on the CPU. The image is the same."""
     if multiscatter:
         scene = with_multiscatter(scene)
     settings = settings_for(scene, seed=seed, width=width, height=height, max_depth=max_depth, nee=nee,
@@ -69,7 +75,7 @@ def render(scene: SceneDescription, spp: int | None = None, device: str = "cpu",
 
         session = open_cluster(scene, settings, cluster, device=device, threads=threads)
     else:
-        session = open_session(scene, settings, device=device, threads=threads)
+        session = open_session(scene, settings, device=device, threads=threads, wavefront=wavefront)
     for w in session.stats.warnings:
         warnings.warn(w, RenderWarning, stacklevel=2)
     spp = scene.sampler.spp if spp is None else int(spp)

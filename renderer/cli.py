@@ -124,6 +124,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--multiscatter", action="store_true", help="rough dielectric, conductor and thinfilm: count the "
                    "bounces between microfacets on every material (energy compensation; pbrt-v4 files cannot "
                    "carry the parameter)")
+    p.add_argument("--wavefront", action=argparse.BooleanOptionalAction, default=None,
+                   help="the wavefront integrator (small kernels per step and material; the default with a CUDA "
+                   "device) or, with --no-wavefront, the megakernel (the CPU's default); the image is the same")
     g = p.add_argument_group("long renders")
     g.add_argument("--time-limit", type=float, metavar="SECONDS", help="stop after the pass that crosses this")
     g.add_argument("--checkpoint", type=Path, metavar="PATH", help="write the accumulation here (atomically)")
@@ -306,7 +309,7 @@ def _compile_only(scene, settings, args: argparse.Namespace) -> int:
     from renderer.device.cuda_compile import compile_kernels, parse_archs, table
     from renderer.device.scene import upload
     from renderer.errors import RenderError
-    from renderer.integrators.kernels import render_kernels
+    from renderer.integrators.kernels import render_kernels, use_wavefront
 
     if not args.compile_only:
         raise RenderError("--arch needs --compile-only")
@@ -315,7 +318,8 @@ def _compile_only(scene, settings, args: argparse.Namespace) -> int:
     archs = parse_archs(args.arch)
     # the kernels depend on the scene's features only, which an upload to the CPU determines
     ds = upload(scene, "cpu", settings.width, settings.height, nee=settings.nee, thin_film=settings.thin_film)
-    kernels = render_kernels(ds.features, settings.sampler.name == "independent", bool(args.aov or args.denoise))
+    kernels = render_kernels(ds.features, settings.sampler.name == "independent", bool(args.aov or args.denoise),
+                             use_wavefront(args.device, args.wavefront, ds.features))
     say = (lambda _m: None) if args.quiet else (lambda m: print(m, file=sys.stderr, flush=True))
     rows = compile_kernels(kernels, archs, say)
     print(table(rows))
@@ -372,6 +376,9 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
             _check_writable(path, what)
     if args.ray is None and (args.ray_chunk or args.ray_workers):
         raise RenderError("--ray-chunk and --ray-workers need --ray")
+    if args.ray is not None and args.wavefront is not None:
+        raise RenderError("--wavefront/--no-wavefront choose the integrator of one process; Ray workers use their "
+                          "device's (the wavefront on a GPU, the megakernel on CPUs: the same image)")
     display = None
     if args.display_server:             # before the upload, so a wrong address fails at once
         from renderer.io.display import DisplayServer
@@ -384,7 +391,7 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
                                device=args.device, threads=args.threads, resume=args.resume)
     else:
         session = open_session(scene, settings, device=args.device, threads=args.threads, resume=args.resume,
-                               memory_limit_gb=args.memory_limit)
+                               memory_limit_gb=args.memory_limit, wavefront=args.wavefront)
     phases["Upload (Warp start, geometry, textures, lights)"] = time.perf_counter() - clock0 - sum(phases.values()) \
         - session.stats.compile_seconds
     phases["Kernel load"] = session.stats.compile_seconds

@@ -79,17 +79,20 @@ def row_chunks(height: int, threads: int) -> list[tuple[int, int]]:
 
 
 class RenderSession:
-    """Upload once, then render passes on demand (``run``); ``state``/``restore`` checkpoint it."""
+    """Upload once, then render passes on demand (``run``); ``state``/``restore`` checkpoint it.
+    ``wavefront`` chooses the integrator (default: the wavefront on CUDA, the megakernel on the
+    CPU); both give the same image, so it is not a setting a checkpoint records."""
 
     def __init__(self, scene: SceneDescription, settings: RenderSettings, device: str = "cpu",
-                 threads: int | None = None):
+                 threads: int | None = None, wavefront: bool | None = None):
         import warp as wp
 
         from renderer.device.runtime import require_device
         from renderer.device.scene import upload
         from renderer.device.film import Film
         from renderer.device.sampler import upload_sampler
-        from renderer.integrators.kernels import render_kernels
+        from renderer.integrators.kernels import render_kernels, use_wavefront
+        from renderer.integrators.wavefront import Wavefront
 
         require_device(device)
         self.scene = scene
@@ -100,8 +103,10 @@ class RenderSession:
         W, H = self.ds.width, self.ds.height
         self.film = Film(W, H, device)
         self.sampler = upload_sampler(settings.sampler, W, H, device)
-        kernels = render_kernels(self.ds.features, settings.sampler.name == "independent")
-        self.kernel = kernels["path"]
+        independent = settings.sampler.name == "independent"
+        self.wavefront = use_wavefront(device, wavefront, self.ds.features)   # the same image either way
+        kernels = render_kernels(self.ds.features, independent, wavefront=self.wavefront)
+        self.kernel = kernels.get("path")
         t0 = time.perf_counter()
         for k in kernels.values():
             wp.load_module(k.module, device=device)
@@ -110,6 +115,8 @@ class RenderSession:
                                  warnings=list(dict.fromkeys(scene.warnings + self.ds.warnings + own)))   # each once
         self.threads = max(1, min(threads or default_threads(device), H))
         self.chunks = row_chunks(H, self.threads)
+        self.paths = Wavefront(kernels, independent, max(r for _, r in self.chunks) * W, self.threads, device) \
+            if self.wavefront else None
         self._fingerprint: str | None = None
         self.ranges: Ranges = []      # the sample indices in the film
 
@@ -127,17 +134,21 @@ class RenderSession:
         s = self.settings
         taken = count()   # the next chunk; next() on it is atomic under the GIL
 
-        def worker() -> None:
+        def worker(slot: int) -> None:
             while (i := next(taken)) < len(self.chunks):
                 first, rows = self.chunks[i]
-                wp.launch(self.kernel, dim=rows * self.ds.width,
-                          inputs=[self.ds.struct, self.sampler.params, s.seed, sample, first, s.max_depth, s.rr_depth,
-                                  self.film.sample, self.film.bad, self.film.rays],
-                          device=self.device)
+                if self.paths is not None:
+                    self.paths.launch(slot, self.ds.struct, self.sampler.params, s.seed, sample, first, rows,
+                                      s.max_depth, s.rr_depth, self.film.sample, self.film.bad, self.film.rays)
+                else:
+                    wp.launch(self.kernel, dim=rows * self.ds.width,
+                              inputs=[self.ds.struct, self.sampler.params, s.seed, sample, first, s.max_depth,
+                                      s.rr_depth, self.film.sample, self.film.bad, self.film.rays],
+                              device=self.device)
                 self.film.accumulate(first, rows)
                 wp.synchronize_device(self.device)
 
-        for f in [pool.submit(worker) for _ in range(self.threads)]:
+        for f in [pool.submit(worker, slot) for slot in range(self.threads)]:
             f.result()
 
     def run(self, spp: int, time_limit: float | None = None, on_pass: Callable[["RenderSession"], None] | None = None,

@@ -30,6 +30,7 @@ def test_unreachable_address_fails_clearly(tmp_path, capsys, form):
 @pytest.mark.parametrize("args, needle", [
     (["--ray", "not-an-address"], "Ray address must be"),
     (["--ray-chunk", "4"], "--ray-chunk and --ray-workers need --ray"),
+    (["--ray", "--wavefront"], "Ray workers use their device's"),
 ])
 def test_bad_cluster_options(tmp_path, capsys, args, needle):
     assert main([str(write_scene(tmp_path)), "-o", str(tmp_path / "o.exr"), *args, "--quiet"]) == 2

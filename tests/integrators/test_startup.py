@@ -22,6 +22,7 @@ import renderer
 from renderer.device.scene import upload
 from renderer.integrators.aov import aov_kernel
 from renderer.integrators.path import integrator_kernel
+from renderer.integrators.wavefront import wavefront_kernels
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -34,6 +35,8 @@ def test_render_kernels_hash_without_generating_code():
     assert len(ds.features.materials) >= 3 and len(ds.features.lights) >= 2, ds.features
     integrator_kernel(ds.features, False)      # declared (and hashed), not compiled: no launch here
     integrator_kernel(ds.features, True)
+    wavefront_kernels(ds.features, False)
+    wavefront_kernels(ds.features, True)
     aov_kernel(ds.features)
     # the declaration-time flag stays set on each Adjoint (the module's own is reset once it is hashed)
     deferred = [f"{a.fun_name} ({a.filename}:{a.fun_lineno})" for a in gc.get_objects()

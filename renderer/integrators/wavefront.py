@@ -1,0 +1,188 @@
+"""The wavefront integrator (pbrt-v4's GPU design): the megakernel's path loop cut into small
+kernels that each do one step for every path of a launch, with the paths' state in memory
+(:class:`renderer.integrators.path_state.PathBuffers`) between them.
+
+Per launch: ``start`` (camera rays, the sampler's start), then per depth ``intersect`` (closest
+hits), ``hits`` (light that escaped or was hit, the end at the maximum depth, mixes resolved to
+the material that shades), one ``shade_<kind>`` per material kind of the scene (a vertex of that
+kind: its BSDF, dispersion, subsurface, the light sample's shadow ray and the BSDF sample that
+continues the path), ``shadow`` (the shadow rays, and what they let through), until no path goes
+on; then ``finish`` (the film, dropped samples and ray counts as the megakernel writes them).
+
+Each step calls the functions the megakernel calls (:mod:`renderer.integrators.vertex`), in the
+same order per path, so the CPU image is the megakernel's bit for bit. A kernel holds only its
+step: on a GPU the BVH query, the light sampling and each material's code no longer share one
+thread's registers. Every kernel after ``start`` runs over a queue of path indices (pbrt-v4's
+ray queues): ``hits`` pushes each path that goes on into its material kind's queue, so a GPU warp
+shades one material; shading pushes the paths that go on and the shadow rays into theirs, so
+finished paths cost no thread. The order within a queue does not matter, as every path's result
+is its own."""
+from __future__ import annotations
+
+import dataclasses
+from functools import lru_cache
+
+import warp as wp
+
+from renderer.device.kernel_options import KERNEL_OPTIONS
+from renderer.device.scene import Features, Scene
+from renderer.geometry.intersect import surface_at
+from renderer.integrators.path_state import (FIRST_KIND, RAYS, SHADOWS, PathBuffers, load_path, path_buffers, push,
+                                             push_shadow, store_path)
+from renderer.integrators.vertex import path_functions, scatter_function
+from renderer.integrators.visibility import ray_queries
+from renderer.materials import REGISTRY, kind_id
+from renderer.sampling.samplers import PixelSample, SamplerParams
+
+
+def _kernel(f) -> wp.Kernel:
+    """A render kernel in a module of its own (compiled, cached and measured alone)."""
+    return wp.kernel(f, module="unique", module_options=KERNEL_OPTIONS)
+
+
+@lru_cache(maxsize=None)
+def start_kernel(features: Features, independent: bool) -> wp.Kernel:
+    start = path_functions(features, independent).start
+
+    def start_paths(scene: Scene, smp: SamplerParams, seed: int, sample_index: int, row_offset: int,
+                    paths: PathBuffers):
+        i = wp.tid()
+        begun = start(scene, smp, seed, sample_index, row_offset * scene.cam.width + i)
+        store_path(paths, i, begun.path)
+        if wp.static(not independent):
+            paths.sample[i] = begun.sample
+        paths.queue[RAYS, i] = i        # every path traces its camera ray (the host knows the count)
+
+    return _kernel(start_paths)
+
+
+@lru_cache(maxsize=None)
+def intersect_kernel(features: Features) -> wp.Kernel:
+    closest = ray_queries(features).closest
+
+    def intersect(scene: Scene, paths: PathBuffers):
+        i = paths.queue[RAYS, wp.tid()]
+        paths.hit[i] = closest(scene, paths.o[i], paths.d[i], 1.0e30)
+        paths.rays[i] = paths.rays[i] + 1
+
+    return _kernel(intersect)
+
+
+@lru_cache(maxsize=None)
+def hits_kernel(features: Features) -> wp.Kernel:
+    arrive = path_functions(features, False).arrive     # does not draw numbers: one variant serves both
+
+    def hits(scene: Scene, paths: PathBuffers, max_depth: int):
+        i = paths.queue[RAYS, wp.tid()]
+        ar = arrive(scene, load_path(paths, i), paths.hit[i], max_depth)
+        paths.L[i] = ar.path.L
+        if ar.shade:
+            paths.material[i] = ar.m
+            push(paths, paths.queue_of_kind[scene.mat.kind[ar.m]], i)
+
+    return _kernel(hits)
+
+
+@lru_cache(maxsize=None)
+def shade_kernel(features: Features, independent: bool, kind: str) -> wp.Kernel:
+    scatter = scatter_function(features, independent, kind)
+    queue = FIRST_KIND + features.materials.index(kind)
+
+    def shade(scene: Scene, smp: SamplerParams, paths: PathBuffers, rr_depth: int):
+        i = paths.queue[queue, wp.tid()]
+        hit = paths.hit[i]
+        s = surface_at(scene.geo, hit, scene.shape_flip[scene.geo.inst_shape[hit.inst]] != 0)
+        ps = PixelSample()
+        if wp.static(not independent):
+            ps = paths.sample[i]
+        sc = scatter(scene, smp, ps, load_path(paths, i), hit, s, paths.material[i], rr_depth, 1.0)
+        store_path(paths, i, sc.path)
+        if sc.shadow.on:
+            push_shadow(paths, i, sc.shadow)
+        if sc.alive:
+            push(paths, RAYS, i)
+
+    return _kernel(shade)
+
+
+@lru_cache(maxsize=None)
+def shadow_kernel(features: Features) -> wp.Kernel:
+    blocked = ray_queries(features).blocked
+
+    def shadow(scene: Scene, paths: PathBuffers):
+        i = paths.queue[SHADOWS, wp.tid()]
+        paths.rays[i] = paths.rays[i] + 1
+        if not blocked(scene, paths.shadow_o[i], paths.shadow_d[i], paths.shadow_t[i]):
+            paths.L[i] = paths.L[i] + paths.shadow_L[i]
+
+    return _kernel(shadow)
+
+
+@lru_cache(maxsize=None)
+def finish_kernel(features: Features) -> wp.Kernel:
+    record = path_functions(features, False).record
+
+    def finish(scene: Scene, paths: PathBuffers, row_offset: int, film: wp.array(dtype=wp.vec3d),
+               bad_samples: wp.array(dtype=int), ray_count: wp.array(dtype=wp.int64)):
+        i = wp.tid()
+        record(scene, load_path(paths, i), row_offset * scene.cam.width + i, film, bad_samples, ray_count)
+
+    return _kernel(finish)
+
+
+def wavefront_kernels(features: Features, independent: bool) -> dict[str, wp.Kernel]:
+    """By name, in launch order: the kernels of one wavefront pass for a scene of ``features``."""
+    kernels = {"start": start_kernel(features, independent), "intersect": intersect_kernel(features),
+               "hits": hits_kernel(features)}
+    for kind in features.materials:
+        kernels[f"shade_{kind}"] = shade_kernel(features, independent, kind)
+    kernels["shadow"] = shadow_kernel(features)
+    kernels["finish"] = finish_kernel(features)
+    return kernels
+
+
+@dataclasses.dataclass
+class Wavefront:
+    """Runs wavefront passes over row chunks: one set of path buffers per worker (``slots``), each
+    sized to the largest chunk (``max_paths``)."""
+
+    kernels: dict[str, wp.Kernel]
+    independent: bool
+    max_paths: int
+    slots: int
+    device: str
+
+    def __post_init__(self) -> None:
+        kinds = [name.removeprefix("shade_") for name in self.kernels if name.startswith("shade_")]
+        queue_of_kind = [-1] * len(REGISTRY)
+        for q, kind in enumerate(kinds):
+            queue_of_kind[kind_id(kind)] = FIRST_KIND + q
+        self.buffers = [path_buffers(self.max_paths, not self.independent, queue_of_kind, self.device)
+                        for _ in range(self.slots)]
+        self.shaders = [self.kernels[f"shade_{kind}"] for kind in kinds]
+
+    def launch(self, slot: int, scene: Scene, smp: SamplerParams, seed: int, sample_index: int, first_row: int,
+               rows: int, max_depth: int, rr_depth: int, film: wp.array, bad_samples: wp.array,
+               ray_count: wp.array) -> None:
+        """One sample for every pixel of rows ``first_row ...``, added as the megakernel adds it.
+        Every kernel after ``start`` runs over a queue, whose length the host reads (twice per
+        depth: after ``hits``, the shading queues; after shading, the rays and shadow rays to
+        trace); the loop ends when no path is left to trace, by ``max_depth`` at the latest."""
+        k, paths, dev = self.kernels, self.buffers[slot], self.device
+        n = rows * scene.cam.width
+        wp.launch(k["start"], dim=n, inputs=[scene, smp, seed, sample_index, first_row, paths], device=dev)
+        tracing = n
+        while tracing > 0:
+            wp.launch(k["intersect"], dim=tracing, inputs=[scene, paths], device=dev)
+            paths.queued.zero_()
+            wp.launch(k["hits"], dim=tracing, inputs=[scene, paths, max_depth], device=dev)
+            queued = paths.queued.numpy().copy()
+            paths.queued.zero_()
+            for shade, count in zip(self.shaders, queued[FIRST_KIND:]):
+                if count > 0:
+                    wp.launch(shade, dim=int(count), inputs=[scene, smp, paths, rr_depth], device=dev)
+            queued = paths.queued.numpy()
+            tracing, shadows = int(queued[RAYS]), int(queued[SHADOWS])
+            if shadows > 0:
+                wp.launch(k["shadow"], dim=shadows, inputs=[scene, paths], device=dev)
+        wp.launch(k["finish"], dim=n, inputs=[scene, paths, first_row, film, bad_samples, ray_count], device=dev)
