@@ -165,8 +165,8 @@ def valve_outline(psi: np.ndarray, radius: float, hinge: float, oblique: float) 
 def oyster_mesh(wall: float, depth: float, lamellae: int, n_r: int, n_fan: int,
                 rng: np.random.Generator) -> tuple[Mesh, int]:
     """A pearl-oyster (Pinctada) valve 1.1 units from umbo to ventral margin (``shell_mesh`` scales
-    it to its length) in a z-up frame, its
-    convex outside up; and the count of its outer surface's faces, which come first. The outline is
+    it to its length) in a z-up frame, its convex outside up; and the count of its outer surface's
+    faces, which come first. The outline is
     nearly round with a long straight hinge (:func:`valve_outline`), the valve a cup ``depth``
     deep; the outside carries ``lamellae`` concentric growth lamellae (each a step ending in a
     lip, as the overlapping growth scales of Pinctada), the inside is smooth: it is the nacre.
