@@ -27,10 +27,11 @@ def lens_material() -> MaterialDesc:
     return next(m for m in load_fragment(SCENES / "parts" / "beach_props.pbrt").materials if m.name == "lens")
 
 
-def luminous_transmittance(lens: MaterialDesc, tint: float, coated_back: bool = True) -> float:
+def luminous_transmittance(lens: MaterialDesc, tint: float, coated_back: bool = False) -> float:
     """D65 luminous transmittance at normal incidence of the lens: its coating (with the layers'
-    Cauchy dispersion, not the thickness map) on the front and, as the scene has it, on the back
-    (else a bare glass back face), no interreflection, and one pass of a grey tint."""
+    Cauchy dispersion, not the thickness map) on the front, a bare glass back face as the scene
+    has it (or, ``coated_back``, the coating there too, as the scene had it until issue 33), no
+    interreflection, and one pass of a grey tint."""
     import colour
 
     v = lens.values
@@ -72,15 +73,16 @@ def main() -> None:
     args = ap.parse_args()
     m, eye, lens_mat = np.load(args.placement)["transform"], camera_eye(), lens_material()
     tint = float(lens_mat.values["tint"][1])   # the scene's: the green of its "rgb tint"
-    print(f"tint {tint} per pass: luminous transmittance {luminous_transmittance(lens_mat, tint):.2f}, "
-          f"{luminous_transmittance(lens_mat, tint, coated_back=False):.2f} with a bare back face")
+    print(f"tint {tint} per pass: luminous transmittance {luminous_transmittance(lens_mat, tint):.2f} "
+          f"(coated front, bare back), {luminous_transmittance(lens_mat, tint, coated_back=True):.2f} "
+          "with both faces coated")
     for other in args.tint:
         print(f"tint {other} per pass: luminous transmittance {luminous_transmittance(lens_mat, other):.2f}")
     tilt = np.degrees(np.arcsin(m[1, 2] / np.linalg.norm(m[:3, 2])))
     print(f"lens axis (mesh +z) {tilt:.1f} deg above the horizontal")
     frame = trimesh.load(ASSETS / "sunglasses" / "frame.ply", process=False)
     for name in ("lens_left", "lens_right"):
-        p, n, w = lens_front(trimesh.load(ASSETS / "sunglasses" / f"{name}.ply", process=False), m)
+        p, n, w = lens_front(trimesh.load(ASSETS / "sunglasses" / f"{name}_front.ply", process=False), m)
         d = (p - eye) / np.linalg.norm(p - eye, axis=1)[:, None]
         r = d - 2.0 * (d * n).sum(1)[:, None] * n                   # the mirror direction
         height = (p[:, 1] - p[:, 1].min()) / np.ptp(p[:, 1])        # 0 at the lens's bottom, 1 at its top

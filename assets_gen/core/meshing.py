@@ -41,6 +41,11 @@ class Mesh:
                     np.concatenate([m.normals for m in meshes]),
                     np.concatenate([m.uvs for m in meshes]))
 
+    def subset(self, keep: np.ndarray) -> "Mesh":
+        """The faces where ``keep`` is true, with only the vertices they use (in their order)."""
+        used, faces = np.unique(self.faces[keep], return_inverse=True)
+        return Mesh(self.vertices[used], faces.reshape(-1, 3), self.normals[used], self.uvs[used])
+
     def flipped(self) -> "Mesh":
         return Mesh(self.vertices, self.faces[:, ::-1].copy(), -self.normals, self.uvs)
 

@@ -1,5 +1,5 @@
-"""Seashells: the parametric gastropod shell of Cortie (1989) in Picado's (2009) notation, and a
-ribbed scallop valve.
+"""Seashells: the parametric gastropod shell of Cortie (1989) in Picado's (2009) notation, a
+ribbed scallop valve and a pearl-oyster valve (nacreous inside).
 
 The gastropod surface is a logarithmic helico-spiral swept by an elliptical aperture that grows
 with it (optionally carrying nodules). For growth angle θ and aperture angle s:
@@ -16,7 +16,9 @@ the nodules' height, position on the aperture, widths and count per whorl. The s
 becomes +y, apex up; the shell is scaled to the requested length in metres.
 
 UVs follow growth: u = θ from apex (0) to lip (1), v = s around the aperture; for the scallop
-u runs from the umbo to the margin and v across the fan. Lines of constant u are growth lines.
+and the pearl oyster u runs from the umbo to the margin and v across the fan. Lines of constant u
+are growth lines. A bivalve's inside (the ``_inner`` file) is the concave face of the valve: with
+``inside_up`` the valve lies on its convex back, its inside open to the sky.
 The wall is solid: an inner surface (the aperture shrunk towards its centre by the wall fraction,
 which never folds over), a rim at the lip and a plug-like rim at the apex. Successive whorls of a
 gastropod overlap each other as in the published model; each whorl is still a closed solid.
@@ -65,6 +67,8 @@ PRESETS: dict[str, Gastropod] = {
                        turns=6.0, L=0.55, P=1.0, W1=0.6, W2=0.4, N=9.0),
 }
 SCALLOP = "scallop"
+PEARL_OYSTER = "pearl-oyster"
+BIVALVES = (SCALLOP, PEARL_OYSTER)
 
 
 def gastropod_surface(g: Gastropod, n_theta: int, n_s: int, cords: int = 0,
@@ -136,17 +140,69 @@ def scallop_mesh(ribs: int, wall: float, n_r: int, n_fan: int) -> tuple[Mesh, in
                     height_field=True), 2 * (n_r - 1) * (n_fan - 1))
 
 
+def valve_outline(psi: np.ndarray, radius: float, hinge: float, oblique: float) -> np.ndarray:
+    """Distance from the umbo (the origin, mid-hinge) along the directions ``psi`` (from +y, the
+    umbo-margin axis) to a valve's margin: the convex hull of a disc of ``radius`` through the
+    umbo, stretched by ``1 + oblique`` on the +x (posterior) side, and the straight hinge line
+    from x = -hinge to +hinge on y = 0."""
+    from scipy.spatial import ConvexHull
+
+    phi = np.linspace(0.0, 2.0 * np.pi, 721)[:-1]
+    x, y = radius * np.sin(phi), radius * (1.0 - np.cos(phi))
+    pts = np.concatenate([np.stack([x * np.where(x > 0, 1.0 + oblique, 1.0), y], 1), [[-hinge, 0.0], [hinge, 0.0]]])
+    hull = pts[ConvexHull(pts).vertices]
+    a, e = hull, np.roll(hull, -1, axis=0) - hull                    # edges a + s e, s in [0, 1]
+    d = np.stack([np.sin(psi), np.cos(psi)], 1)
+    # origin + r d = a + s e  ->  solve per (ray, edge) with 2D cross products
+    cross = d[:, None, 0] * e[None, :, 1] - d[:, None, 1] * e[None, :, 0]
+    safe = np.where(np.abs(cross) > 1e-12, cross, np.inf)
+    r = (a[None, :, 0] * e[None, :, 1] - a[None, :, 1] * e[None, :, 0]) / safe
+    s = (a[None, :, 0] * d[:, None, 1] - a[None, :, 1] * d[:, None, 0]) / safe
+    r = np.where((s >= -1e-9) & (s <= 1 + 1e-9), r, 0.0)
+    return np.maximum(r.max(axis=1), np.where(np.abs(np.abs(psi) - np.pi / 2) < 1e-9, hinge, 0.0))
+
+
+def oyster_mesh(wall: float, depth: float, lamellae: int, n_r: int, n_fan: int,
+                rng: np.random.Generator) -> tuple[Mesh, int]:
+    """A pearl-oyster (Pinctada) valve 1.1 units from umbo to ventral margin (``shell_mesh`` scales
+    it to its length) in a z-up frame, its convex outside up; and the count of its outer surface's
+    faces, which come first. The outline is
+    nearly round with a long straight hinge (:func:`valve_outline`), the valve a cup ``depth``
+    deep; the outside carries ``lamellae`` concentric growth lamellae (each a step ending in a
+    lip, as the overlapping growth scales of Pinctada), the inside is smooth: it is the nacre.
+    Built in polar coordinates around the umbo like :func:`scallop_mesh`; the seed only varies the
+    outline's obliquity and the lamellae's spacing."""
+    rho = np.linspace(0.03, 1.0, n_r)[:, None]
+    psi = np.linspace(-np.pi / 2, np.pi / 2, n_fan)[None, :]
+    oblique = 0.08 + 0.04 * rng.uniform(-1.0, 1.0)      # the posterior side grows a little further
+    r_max = valve_outline(psi[0], 0.55, hinge=0.42, oblique=oblique)[None, :]
+    r = rho * r_max
+    x, y = r * np.sin(psi), r * np.cos(psi)
+    # the cup: highest over the valve's centre, falling to the margin as (1 - d²)^0.75
+    d2 = (x / 0.57) ** 2 + ((y - 0.55) / 0.57) ** 2
+    cup = depth * np.clip(1.0 - d2, 0.0, None) ** 0.75
+    # lamellae: a sawtooth in ρ (slow rise, sharp lip), their spacing widening towards the margin
+    edges = np.cumsum(rng.gamma(8.0, 1.0 / 8.0, size=lamellae))
+    phase = np.interp(np.sqrt(rho), np.concatenate([[0.0], edges / edges[-1]]), np.arange(lamellae + 1.0)) % 1.0
+    step = 0.35 * wall * rho * phase ** 2
+    smooth = np.stack(np.broadcast_arrays(x, y, cup), axis=-1)
+    outer = grid(smooth + step[..., None] * np.array([0.0, 0.0, 1.0]))
+    if outer.normals[:, 2].sum() < 0:
+        outer = outer.flipped()
+    # the wall (straight down, so the thin margin never folds) thins towards the margin and the umbo
+    t_wall = wall * np.clip(rho / 0.2, 0.05, 1.0) * (1.0 - 0.6 * rho ** 4) * np.ones_like(psi)
+    inner = smooth.reshape(-1, 3) - t_wall.reshape(-1, 1) * np.array([0.0, 0.0, 1.0])
+    n_u, n_v = np.shape(smooth)[:2]
+    return closed_solid(outer, inner, grid_boundary(n_u, n_v, False)), len(outer.faces)
+
+
 def solid_parts(solid: Mesh, n_outer: int) -> tuple[Mesh, Mesh]:
     """(exterior, interior) of a solid laid out by :func:`closed_solid` (outer faces, as many inner
     faces, then rims): the outer surface with the rims, and the inner surface, each with only its
     own vertices. Together they are the watertight solid; apart, each takes its own material."""
     inner = np.zeros(len(solid.faces), dtype=bool)
     inner[n_outer:2 * n_outer] = True
-
-    def part(keep: np.ndarray) -> Mesh:
-        used, faces = np.unique(solid.faces[keep], return_inverse=True)
-        return Mesh(solid.vertices[used], faces.reshape(-1, 3), solid.normals[used], solid.uvs[used])
-    return part(~inner), part(inner)
+    return solid.subset(~inner), solid.subset(inner)
 
 
 def aperture(interior: Mesh) -> dict[str, list[float]]:
@@ -160,20 +216,35 @@ def aperture(interior: Mesh) -> dict[str, list[float]]:
     return {"aperture_centre_m": centre.round(5).tolist(), "aperture_normal": normal.round(4).tolist()}
 
 
+def inside_facing(interior: Mesh) -> dict[str, object]:
+    """Where a bivalve's inside faces: its area-weighted mean normal (mesh frame) and the share of
+    its area whose normal points up (+y), for placing the valve where the sky and sun reach it."""
+    a, b, c = (interior.vertices[interior.faces[:, k]] for k in range(3))
+    n = np.cross(b - a, c - a)
+    mean = n.sum(0) / np.linalg.norm(n.sum(0))
+    area = np.linalg.norm(n, axis=1)
+    return {"inside_normal": mean.round(4).tolist(), "inside_up_share": round(float(area[n[:, 1] > 0].sum() / area.sum()), 4)}
+
+
 def shell_mesh(preset: str, length: float, wall: float, per_turn: int, around: int, ribs: int,
-               rng: np.random.Generator, cords: int = 0, cord_height: float = 0.0) -> tuple[Mesh, Mesh]:
+               rng: np.random.Generator, cords: int = 0, cord_height: float = 0.0,
+               depth: float = 0.22, inside_up: bool = False) -> tuple[Mesh, Mesh]:
     """(exterior, interior) of the shell in metres, y up, resting on y = 0, its largest extent
     ``length``. The seed varies the preset slightly (growth angle, aperture, nodules) so no two
-    shells are clones."""
+    shells are clones. A bivalve ``inside_up`` is turned over about its umbo-margin axis first."""
     if preset == SCALLOP:
         m, n_outer = scallop_mesh(ribs + int(rng.integers(-2, 3)), wall * 0.15,
                                   n_r=max(8, per_turn // 2), n_fan=max(2 * around, 12 * ribs))
+    elif preset == PEARL_OYSTER:
+        m, n_outer = oyster_mesh(wall * 0.25, depth, ribs, n_r=max(12, per_turn), n_fan=max(24, 2 * around), rng=rng)
     else:
         j = rng.normal(1.0, 0.02, size=4)
         base = PRESETS[preset]
         g = replace(base, alpha=base.alpha + 0.15 * rng.standard_normal(), a=base.a * j[0], b=base.b * j[1],
                     turns=base.turns * j[2], L=base.L * j[3])
         m, n_outer = gastropod_mesh(g, wall, per_turn, around, cords, cord_height)
+    if inside_up and preset in BIVALVES:
+        m = m.transformed(np.diag([-1.0, 1.0, -1.0]))     # half a turn about the umbo-margin axis
     # model frame z-up -> scene y-up: (x, y, z) -> (x, z, -y), a proper rotation
     m = m.transformed(np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]]))
     lo, hi = m.vertices.min(0), m.vertices.max(0)
@@ -184,41 +255,46 @@ def shell_mesh(preset: str, length: float, wall: float, per_turn: int, around: i
 
 @dataclass(frozen=True)
 class SeashellParams(Params):
-    preset: str = param("conch", "shell preset", choices=(*PRESETS, SCALLOP))
+    preset: str = param("conch", "shell preset", choices=(*PRESETS, *BIVALVES))
     length: float = param(0.07, "largest extent, m")
     wall: float = param(0.08, "wall thickness as a share of the aperture radius")
     per_turn: int = param(48, "mesh rows per whorl")
     around: int = param(40, "mesh columns around the aperture")
-    ribs: int = param(18, "scallop: radial ribs")
+    ribs: int = param(18, "scallop: radial ribs; pearl-oyster: concentric growth lamellae")
+    depth: float = param(0.22, "pearl-oyster: the cup's depth as a share of the valve's height")
+    inside_up: bool = param(False, "bivalves: lie on the convex back, the (nacreous) inside up")
     cords: int = param(0, "gastropods: spiral cords (ribs along the growth) around the aperture; "
                        "give 'around' at least 5 columns per cord")
     cord_height: float = param(0.05, "gastropods: cord height as a share of the aperture radius")
 
     def validate(self) -> None:
-        require(self.preset in (*PRESETS, SCALLOP),
-                f"unknown preset {self.preset!r}; choose from {[*PRESETS, SCALLOP]}")
+        require(self.preset in (*PRESETS, *BIVALVES),
+                f"unknown preset {self.preset!r}; choose from {[*PRESETS, *BIVALVES]}")
         require(0.005 <= self.length <= 1.0, f"length must be 0.005..1 m, got {self.length}")
         require(0.01 <= self.wall <= 0.5, f"wall (share of the aperture radius) must be 0.01..0.5, got {self.wall}")
         require(8 <= self.per_turn <= 512 and 8 <= self.around <= 512, "per-turn and around must be 8..512")
         require(3 <= self.ribs <= 60, f"ribs must be 3..60, got {self.ribs}")
         require(0 <= self.cords <= 64 and 0 <= self.cord_height <= 0.3, "cords must be 0..64, cord height 0..0.3")
+        require(0.05 <= self.depth <= 0.45, f"depth (share of the valve's height) must be 0.05..0.45, got {self.depth}")
 
 
 def write(job: Job) -> list[str]:
     """``<preset>.ply`` (the outside and the rims) and ``<preset>_inner.ply`` (the inside: nacre);
     the manifest also records the preset's model parameters and where the aperture faces."""
     p = job.params
-    if p.preset != SCALLOP:
+    if p.preset not in BIVALVES:
         job.note(model=asdict(PRESETS[p.preset]))
     exterior, interior = shell_mesh(p.preset, p.length, p.wall, p.per_turn, p.around, p.ribs,
-                                    np.random.default_rng(job.seed), p.cords, p.cord_height)
-    if p.preset != SCALLOP:
+                                    np.random.default_rng(job.seed), p.cords, p.cord_height, p.depth, p.inside_up)
+    if p.preset not in BIVALVES:
         job.note(**aperture(interior))
+    else:
+        job.note(**inside_facing(interior))
     names = [f"{p.preset}.ply", f"{p.preset}_inner.ply"]
     for mesh, name in zip((exterior, interior), names):
         mesh.write(job.stage / name)
     return names
 
 
-GENERATOR = Generator("seashell", "a parametric gastropod shell or a ribbed scallop (PLY)",
+GENERATOR = Generator("seashell", "a parametric gastropod shell, a ribbed scallop or a pearl-oyster valve (PLY)",
                       SeashellParams, write, __doc__)

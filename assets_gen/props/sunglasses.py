@@ -4,8 +4,10 @@ temples.
 
 Base curve B (dioptres, at the tooling index 1.53) gives the front radius R = 530 mm / B, so
 base 6 is R ≈ 88 mm. Lens outline |x/a|^n + |y/b|^n = 1 (a, b: half the lens width and height).
-Lenses are meniscus shells (back sphere concentric, ``thickness`` thinner: 2 mm by default) and
-written as their own closed meshes for the thin-film material. Lens UV: u = 0.5 + x/(2a),
+Lenses are meniscus shells (back sphere concentric, ``thickness`` thinner: 2 mm by default),
+each written in two files that together are the closed solid: the convex front face
+(``lens_<side>_front.ply``, where a mirror coating goes) and the concave back face with the
+ground edge (``lens_<side>_back.ply``), so a scene can coat the front only. Lens UV: u = 0.5 + x/(2a),
 v = 0.5 + y/(2b) in the lens's own plane, so (0.5, 0.5) is the lens centre and the outline touches
 the unit square's inscribed superellipse; u grows towards the temple on both lenses (mirror
 images), v upwards. Each lens edge sits ``groove`` deep inside its rim.
@@ -85,7 +87,8 @@ def sphere_sag(xy: np.ndarray, radius: float) -> np.ndarray:
 def lens_mesh(a: float, b: float, n: float, radius: float, thickness: float,
               rings: int = 10, sides: int = 96) -> tuple[Mesh, np.ndarray]:
     """One lens in its own frame (front vertex at the origin, optical axis +z), and its outline
-    at mid-thickness (for the rim). The temporal side is +x."""
+    at mid-thickness (for the rim). The temporal side is +x. The front face's triangles come
+    first (:func:`front_faces` counts them), then the back face's and the edge's."""
     t = 2.0 * np.pi * np.arange(sides) / sides
     outline = superellipse(a, b, n, t)
     rho = np.linspace(1.0 / rings, 1.0, rings)
@@ -99,6 +102,20 @@ def lens_mesh(a: float, b: float, n: float, radius: float, thickness: float,
     lens = closed_solid(front, back, [edge])
     mid = np.concatenate([outline, (sphere_sag(outline, radius) - 0.5 * thickness)[:, None]], 1)
     return lens, mid
+
+
+def front_faces(rings: int = 10, sides: int = 96) -> int:
+    """How many of :func:`lens_mesh`'s first triangles are the front face: the centre fan and the
+    quads between the ``rings`` outline rings (each ring with its seam vertex)."""
+    return sides + 2 * (rings - 1) * sides
+
+
+def lens_faces(lens: Mesh, rings: int = 10, sides: int = 96) -> tuple[Mesh, Mesh]:
+    """(front face, back face with the edge) of a lens from :func:`lens_mesh`, each with only its
+    own vertices: together the closed lens, apart each takes its own material."""
+    front = np.zeros(len(lens.faces), dtype=bool)
+    front[:front_faces(rings, sides)] = True
+    return lens.subset(front), lens.subset(~front)
 
 
 def oval_tube(path: np.ndarray, across: np.ndarray, half_across: np.ndarray | float,
@@ -203,13 +220,15 @@ def rest_pose(lenses: list[Mesh], frame: Mesh) -> dict[str, object]:
 
 
 def write(job: Job) -> list[str]:
-    """The two lenses and the frame; the manifest also records the front radius and the rest pose."""
+    """Each lens's front and back (with its edge) and the frame; the manifest also records the
+    front radius and the rest pose."""
     left, right, frame = sunglasses(job.params, np.random.default_rng(job.seed))
     job.note(front_radius_m=job.params.front_radius, **rest_pose([left, right], frame))
-    names = ["lens_left.ply", "lens_right.ply", "frame.ply"]
-    for mesh, name in zip((left, right, frame), names):
+    parts = {**{f"lens_{side}_{face}.ply": m for side, lens in (("left", left), ("right", right))
+                for face, m in zip(("front", "back"), lens_faces(lens))}, "frame.ply": frame}
+    for name, mesh in parts.items():
         mesh.write(job.stage / name)
-    return names
+    return list(parts)
 
 
 GENERATOR = Generator("sunglasses", "superellipse lenses on a base-curve sphere, rims, bridge, temples",

@@ -1,6 +1,8 @@
 """Props put down on the sand: ``rest`` drops a rigid mesh until it lies still on the surface
 (sunglasses on their lens rims and temple tips), ``bury`` rests it and then sinks it by a fraction
-of its height (a shell half in the sand, tilted along the surface). The result is a pbrt Include
+of its height (a shell half in the sand, tilted along the surface), ``wedge`` keeps the given tilt
+and sinks the prop's lowest edge into the sand by a fraction of its height (a valve left stuck
+at an angle by the swash: the sand around the buried edge holds it, so it need not rest). The result is a pbrt Include
 file with the object-to-world ``ConcatTransform`` and the same matrix as ``placement.npz``.
 
 Resting is potential-energy minimisation under non-penetration: with the yaw fixed, the pose's
@@ -31,11 +33,12 @@ class PlacementParams(Params):
     surface: str = param("assets/sand/sand.ply", "sand mesh to put the prop on (PLY, +y up, m)", path=True)
     mesh: str = param("assets/conch/conch.ply", "prop mesh, or a folder whose PLYs move as one rigid body",
                       path=True)
-    mode: str = param("rest", "rest: lie still on >= 3 contacts; bury: rest, then sink", choices=("rest", "bury"))
+    mode: str = param("rest", "rest: lie still on >= 3 contacts; bury: rest, then sink; wedge: keep the tilt, "
+                      "lower to the sand, then sink", choices=("rest", "bury", "wedge"))
     position: tuple[float, float] = param((0.0, 0.0), "approximate (x, z) of the centre of mass, m")
     yaw_deg: float = param(0.0, "rotation about +y, degrees (pbrt's Rotate yaw 0 1 0)")
     tilt_deg: tuple[float, float] = param((0.0, 0.0), "starting rotation about x, then z, before the yaw, degrees")
-    depth: float = param(0.3, "bury: fraction of the rested prop's height sunk below its lowest point")
+    depth: float = param(0.3, "bury, wedge: fraction of the placed prop's height sunk below its lowest point")
     contact_tolerance: float = param(5e-5, "gap below which a point counts as touching, m")
 
     def validate(self) -> None:
@@ -205,8 +208,14 @@ def place(p: PlacementParams) -> Pose:
     reach = float(np.linalg.norm(v - centre_of_mass(v, f), axis=1).max()) + 0.01
     centre = np.array(p.position)
     ground = Ground(np.asarray(sand.vertices, dtype=np.float64), np.asarray(sand.faces), centre, reach)
-    pose = rest(v, f, ground, centre, start, p.contact_tolerance)
-    if p.mode == "bury":
+    if p.mode == "wedge":
+        trans = np.array([centre[0], 0.0, centre[1]]) - start @ centre_of_mass(v, f)
+        _, gap = _gaps(v, f, start, trans, ground)
+        trans[1] += LIFT - gap.min()
+        pose = Pose(start, trans, 1, LIFT)
+    else:
+        pose = rest(v, f, ground, centre, start, p.contact_tolerance)
+    if p.mode in ("bury", "wedge"):
         y = pose.apply(v)[:, 1]
         sink = p.depth * float(y.max() - y.min())
         pose = Pose(pose.rotation, pose.translation - [0.0, sink, 0.0], 0, pose.min_gap - sink)

@@ -13,6 +13,7 @@ from plyfile import PlyData
 from assets_gen import sky
 from assets_gen.cli import main
 from assets_gen.core import GeneratorError
+from assets_gen.core.output import write_ply
 from assets_gen.props import palm, seashell, sunglasses, umbrella
 from renderer.io.images import read_exr
 
@@ -84,7 +85,7 @@ def test_manifest_records_derived_facts(tmp_path):
     assert shell["params"]["model"]["alpha"] == seashell.PRESETS["nautilus"].alpha
 
 
-@pytest.mark.parametrize("preset", [*seashell.PRESETS, seashell.SCALLOP])
+@pytest.mark.parametrize("preset", [*seashell.PRESETS, *seashell.BIVALVES])
 def test_seashell_solid(tmp_path, preset):
     """The outside (with the rims) and the inside are separate files, each a valid open surface;
     together they are the closed, outward-wound shell."""
@@ -155,8 +156,18 @@ def test_seashell_uv_follows_growth():
     assert lip > 3 * apex
 
 
+def whole_lens(front, back) -> str:
+    """The closed lens made of its front and back files, written as one PLY for the checks."""
+    (pf, ff, nf, uf), (pb, fb, nb, ub) = load_ply(front), load_ply(back)
+    path = str(front).replace("_front.ply", ".ply")
+    write_ply(path, np.concatenate([pf, pb]), np.concatenate([ff, fb + len(pf)]), np.concatenate([nf, nb]),
+              np.concatenate([uf, ub]))
+    return path
+
+
 def test_sunglasses(tmp_path):
-    left, right, frame, _ = build("sunglasses", tmp_path)
+    lf, lb, rf, rb, frame, _ = build("sunglasses", tmp_path)
+    left, right = whole_lens(lf, lb), whole_lens(rf, rb)
     for lens in (left, right):
         check_mesh(lens, extent=(0.054, 0.056))
         pos, f, _, uv = load_ply(lens)
@@ -168,6 +179,56 @@ def test_sunglasses(tmp_path):
     l_pos = load_ply(left)[0]
     r_pos = load_ply(right)[0]
     assert l_pos[:, 0].min() > 0 > r_pos[:, 0].max()                # the bridge's gap between lenses
+
+
+def test_lens_front_and_back_apart(tmp_path):
+    """Each lens comes as its convex front face (the coating's) and its back face with the ground
+    edge: neither closed alone, together the closed lens; every front triangle faces forward (+z,
+    the way the wearer looks), and of the back file's triangles every one that faces along the
+    axis faces backward (the rest are the edge)."""
+    lf, lb, rf, rb, _, _ = build("sunglasses", tmp_path)
+    for front, back in ((lf, lb), (rf, rb)):
+        parts = [check_mesh(front, closed=False), check_mesh(back, closed=False)]
+        assert not parts[0].is_watertight and not parts[1].is_watertight
+        assert np.all(parts[0].face_normals[:, 2] > 0.5)
+        axial = np.abs(parts[1].face_normals[:, 2]) > 0.5
+        assert axial.sum() > 0.9 * len(parts[0].faces) and np.all(parts[1].face_normals[axial, 2] < 0)
+        whole = trimesh.util.concatenate(parts)
+        whole.merge_vertices()
+        assert whole.is_watertight and whole.is_winding_consistent and whole.volume > 0
+
+
+def test_oyster_nacre_faces_the_sky(tmp_path):
+    """The pearl-oyster valve lying on its back: its inside (the nacre's file) faces up, all of it,
+    and lying as a valve does by default (convex side up) the same inside faces down; the manifest
+    says where it faces. Same seed, same bytes; another seed, another valve."""
+    up = build("seashell", tmp_path / "up", 3, preset="pearl-oyster", per_turn=40, around=24, inside_up=True)
+    down = build("seashell", tmp_path / "down", 3, preset="pearl-oyster", per_turn=40, around=24)
+    for inner, sign in ((up[1], 1.0), (down[1], -1.0)):
+        m = check_mesh(inner, closed=False)
+        assert np.all(sign * m.face_normals[:, 1] > 0.0)
+        mean = (m.face_normals * m.area_faces[:, None]).sum(0)
+        assert sign * mean[1] / np.linalg.norm(mean) > 0.9
+    notes = json.loads(open(up[-1]).read())["params"]
+    assert notes["inside_up_share"] == 1.0 and notes["inside_normal"][1] > 0.9
+    outside = load_ply(up[0])[0]
+    assert outside[:, 1].min() == pytest.approx(0.0, abs=1e-6)           # it lies on its convex back
+    again = build("seashell", tmp_path / "again", 3, preset="pearl-oyster", per_turn=40, around=24, inside_up=True)
+    other = build("seashell", tmp_path / "other", 4, preset="pearl-oyster", per_turn=40, around=24, inside_up=True)
+    for a, b, c in zip(up[:2], again[:2], other[:2]):
+        assert open(a, "rb").read() == open(b, "rb").read()
+        assert open(a, "rb").read() != open(c, "rb").read()
+
+
+def test_valve_outline_is_round_with_a_straight_hinge():
+    """From the umbo, the margin lies at the disc's 2 r cos psi on the ventral side and along the
+    hinge line (psi = +-90 deg) at the hinge's half length; the posterior side reaches further."""
+    psi = np.radians([-90.0, -30.0, 0.0, 30.0, 90.0])
+    r = seashell.valve_outline(psi, 0.5, hinge=0.4, oblique=0.0)
+    assert r[[0, 4]] == pytest.approx([0.4, 0.4], abs=1e-9)
+    assert r[1:4] == pytest.approx(2 * 0.5 * np.cos(psi[1:4]), rel=2e-4)
+    skew = seashell.valve_outline(psi, 0.5, hinge=0.4, oblique=0.1)
+    assert skew[3] > r[3] and skew[1] == pytest.approx(r[1], rel=2e-4)
 
 
 def test_lens_thickness_along_rays():
@@ -207,7 +268,8 @@ def test_sunglasses_rest_on_lens_rims_and_temple_tips(tmp_path):
     paths = build("sunglasses", tmp_path, 2)
     notes = json.loads(open(paths[-1]).read())["params"]
     rot = trimesh.transformations.rotation_matrix(np.radians(notes["rest_tilt_deg"]), [1, 0, 0])[:3, :3]
-    meshes = [trimesh.Trimesh(*load_ply(p)[:2]) for p in paths[:3]]
+    solids = [whole_lens(*paths[0:2]), whole_lens(*paths[2:4]), paths[4]]
+    meshes = [trimesh.Trimesh(*load_ply(p)[:2]) for p in solids]
     placed = [m.vertices @ rot.T + [0, notes["rest_lift_m"], 0] for m in meshes]
     assert min(v[:, 1].min() for v in placed) == pytest.approx(0.0, abs=1e-5)
     contacts = np.array(notes["contact_points_m"]) @ rot.T + [0, notes["rest_lift_m"], 0]

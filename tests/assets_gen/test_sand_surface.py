@@ -33,7 +33,8 @@ def digest(path: Path) -> str:
 @pytest.fixture(scope="module")
 def built(tmp_path_factory) -> Path:
     """Dunes (flat interdune in front of the camera: crests at x = 4 + 10k m), ripples as a map,
-    the near field, a box rested and a shell-like ellipsoid buried with its imprint."""
+    the near field, a box rested, a box wedged at a tilt and a shell-like ellipsoid buried with its
+    imprint."""
     root = tmp_path_factory.mktemp("sand")
     assert run("dunes", "--size-x", 12, "--size-z", 8, "--spacing", 0.1, "--dune-height", 0.5,
                "--dune-wavelength", 10, "--crest-x", 4, "--seed", 0, "--out", root / "dunes", "--no-preview") == 0
@@ -55,6 +56,9 @@ def built(tmp_path_factory) -> Path:
                root / "shell_pose" / "placement.npz", "--out", root / "imprint") == 0
     assert run("placement", "--surface", root / "imprint" / "sand.ply", "--mesh", root / "box.ply", "--mode", "rest",
                "--position", -1.5, -0.05, "--yaw-deg", 20, "--tilt-deg", 10, 5, "--out", root / "box_pose") == 0
+    assert run("placement", "--surface", root / "imprint" / "sand.ply", "--mesh", root / "box.ply", "--mode", "wedge",
+               "--depth", 0.25, "--position", -1.6, 0.1, "--yaw-deg", 40, "--tilt-deg", 35, 0,
+               "--out", root / "box_wedge") == 0
     return root
 
 
@@ -185,6 +189,25 @@ def test_rest_pose_has_three_contacts_and_no_penetration(built):
     assert np.ptp(touching[:, 0]) > 0.02 or np.ptp(touching[:, 2]) > 0.02     # spread out, not one corner
     patch = local(sv, sf, bv.mean(0), 0.1)
     assert mesh_crossings(sv, patch, bv, bf) == 0 and mesh_crossings(bv, bf, sv, patch) == 0
+
+
+def test_wedged_prop_keeps_its_tilt_and_sinks_its_low_edge(built):
+    """``wedge`` keeps the requested yaw and tilts exactly, puts the centre of mass over the given
+    (x, z), and sinks the lowest corner a quarter of the prop's height below the sand under it."""
+    from assets_gen.terrain.placement import centre_of_mass, rotation
+
+    m = np.load(built / "box_wedge" / "placement.npz")["transform"]
+    assert np.allclose(m[:3, :3], rotation("y", 40) @ rotation("x", 35) @ rotation("z", 0), atol=1e-12)
+    v, f = load(built / "box.ply")
+    com = m[:3, :3] @ centre_of_mass(v, f) + m[:3, 3]
+    assert com[[0, 2]] == pytest.approx([-1.6, 0.1], abs=1e-9)
+    bv, _ = placed(built, "box.ply", "box_wedge")
+    sv, sf = load(built / "imprint" / "sand.ply")
+    top = np.column_stack([bv[:, 0], np.full(len(bv), 5.0), bv[:, 2]])
+    gap = bv[:, 1] - (5.0 - cast_rays(sv, sf, top, np.tile([0.0, -1.0, 0.0], (len(bv), 1))))
+    sunk = 0.25 * np.ptp(bv[:, 1])
+    assert -sunk - 1e-6 <= gap.min() <= -sunk + 5e-4
+    assert (gap > 0).sum() >= len(bv) // 2                                   # the rest stands out of the sand
 
 
 def test_buried_shell_sits_in_its_imprint(built):
