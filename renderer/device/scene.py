@@ -12,7 +12,7 @@ from renderer.errors import SceneError
 from renderer.geometry.instances import Geometry, GeometryData, build_geometry
 from renderer.lights import build_light_table, kinds_in
 from renderer.lights.table import Lights
-from renderer.materials import Materials, build_materials, dielectric, disney, selection, thinfilm
+from renderer.materials import Materials, build_materials, dielectric, disney, lobe_features, selection, thinfilm
 from renderer.color.rgb_weights import RgbWeightTable, make_rgb_weight_table
 from renderer.scene.description import SceneDescription
 from renderer.settings import THIN_FILM_MODE, thin_film_samples
@@ -47,6 +47,10 @@ class Features:
     alpha: bool = False         # some shape has an alpha cut-out or the interface material
     mix: bool = False           # some material is a mix (chosen per hit before shading)
     dispersion: bool = False    # some dielectric's eta varies with the wavelength (renderer.optics.dispersion)
+    # Which lobes the materials can reach (renderer.materials.lobe_features); the defaults compile every lobe.
+    multiscatter: bool = True   # some material that may be rough counts the bounces between microfacets
+    layered: bool = True        # some thinfilm takes the layered random walk (coated* always do)
+    smooth: tuple[str, ...] = ()    # types whose every material is smooth: no GGX lobes compiled for them
 
 
 @dataclass
@@ -133,6 +137,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
         alpha=bool(np.any(alpha >= 0)),
         mix=any(m.kind == selection.MIX for m in desc.materials),
         dispersion=dispersion,
+        **lobe_features(desc.materials),
     )
     keep = [geo, mat_keep, tex_keep, light_keep, cam_keep, S.shape_material, S.shape_light, S.shape_flip,
             S.shape_alpha, S.spectral.w]
