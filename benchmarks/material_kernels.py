@@ -3,7 +3,10 @@ call the material dispatch once (``eval_pdf`` or ``sample``), built from the sam
 ``shading_functions(features)`` the path kernel uses, compiled for sm_90 without a GPU, with
 ``--compile-only``'s columns (registers, frame, LDL/STL, code, NVRTC seconds).
 
-    python benchmarks/material_kernels.py thinfilm --hooks eval sample [--multiscatter] [--layered]
+    python benchmarks/material_kernels.py thinfilm --hooks eval sample [--rough] [--multiscatter] [--layered]
+
+Without flags the materials are smooth, single scattering and without the layered walk (the
+features of ``scenes/ar_coating.pbrt``); ``--rough --multiscatter --layered`` compiles every lobe.
 
 A path kernel holds much else besides (the BVH query, lights, the sampler); a micro-kernel shows
 what a change to one material does, in a minute of NVRTC instead of ten. (No ``from __future__
@@ -74,11 +77,9 @@ def main() -> None:
     from renderer.device.cuda_compile import compile_kernels, parse_archs, table
     from renderer.device.scene import Features
 
-    fields = Features.__dataclass_fields__
-    extra = {k: v for k, v in (("multiscatter", a.multiscatter), ("layered", a.layered),
-                               ("rough", tuple(sorted(a.materials)) if a.rough else ()))
-             if k in fields}
-    features = Features(materials=tuple(sorted(a.materials)), bump=False, lights=(), escaping=(), **extra)
+    kinds = tuple(sorted(a.materials))
+    features = Features(materials=kinds, bump=False, lights=(), escaping=(), multiscatter=a.multiscatter,
+                        layered=a.layered, smooth=() if a.rough else kinds)
     print(f"features: {features}", file=sys.stderr, flush=True)
     kernels = {f"{'+'.join(a.materials)} {h}": micro_kernel(features, h) for h in a.hooks}
     rows = compile_kernels(kernels, parse_archs(a.arch), lambda m: print(m, file=sys.stderr, flush=True))

@@ -48,8 +48,7 @@ from renderer.materials.coating import (BOTH_SIDES, Coating, coating_eval, coati
                                         mean_reflectance)
 from renderer.materials.energy import mirror_lost, mirror_multiple
 from renderer.materials.coating_table import coating_table
-from renderer.materials.layered import (FILM, LAMBERT, SLAB_PARAMS, Interface, Slab, layered_eval_pdf,
-                                        layered_sample, make_slab, walk_flags)
+from renderer.materials.layered import FILM, LAMBERT, SLAB_PARAMS, Interface, Slab, make_slab, walk, walk_flags
 from renderer.materials.microfacet import (ROUGHNESS_PARAMS, ggx_sample_visible, is_smooth, resolve_roughness,
                                            roughness_to_alpha)
 from renderer.materials.stack import STACK_PARAMS, resolve_stack, stack_rows
@@ -378,13 +377,14 @@ def _lobes(rough: bool, multiscatter: bool, layered: bool) -> tuple[wp.Function,
     """``eval_pdf`` and ``sample`` compiling only what a kernel's thin films can reach: the GGX lobes
     (``rough``), their compensation (``multiscatter``), the layered walk (``layered``)."""
     rough_eval_pdf, rough_sample = _rough_lobes(multiscatter)
+    walk_eval_pdf, walk_sample = walk(FILM, LAMBERT, not rough)   # the coating over its Lambertian base
 
     @wp.func
     def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
         """The layered walk's estimate, the rough lobes, or the smooth coating's substrate lobe."""
         if wp.static(layered):
             if _layered(b):
-                return layered_eval_pdf(_slab(b), wo, wi)
+                return wp.static(walk_eval_pdf)(_slab(b), wo, wi)
         if wp.static(rough):
             alpha = _alpha(b)
             if not is_smooth(alpha):
@@ -396,7 +396,7 @@ def _lobes(rough: bool, multiscatter: bool, layered: bool) -> tuple[wp.Function,
         """The layered walk, the rough lobes, or the smooth coating's mirror, refraction or substrate."""
         if wp.static(layered):
             if _layered(b):
-                return layered_sample(_slab(b), wo, u)
+                return wp.static(walk_sample)(_slab(b), wo, u)
         if wp.static(rough):
             alpha = _alpha(b)
             if not is_smooth(alpha):

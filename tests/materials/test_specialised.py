@@ -70,6 +70,7 @@ CASES = [
     ("thinfilm", {"roughness": 0.1, "reflectance": 0.3}),
     ("thinfilm", {"roughness": 0.1, "transmission": True, "thickness": 300.0}),
     ("thinfilm", {"k_inner": 2.0, "eta_inner": 0.5}),
+    ("thinfilm", {"layered": True, "reflectance": (0.6, 0.5, 0.4)}),     # the walk under a smooth coating
 ]
 
 
