@@ -12,7 +12,8 @@ from renderer.errors import SceneError
 from renderer.geometry.instances import Geometry, GeometryData, build_geometry
 from renderer.lights import build_light_table, kinds_in
 from renderer.lights.table import Lights
-from renderer.materials import Materials, build_materials, dielectric, disney, selection, subsurface, thinfilm
+from renderer.materials import (Materials, build_materials, dielectric, disney, lobe_features, selection, subsurface,
+                                thinfilm)
 from renderer.media.device import Media, upload_media
 from renderer.color.rgb_weights import RgbWeightTable, make_rgb_weight_table
 from renderer.scene.description import SceneDescription
@@ -54,6 +55,10 @@ class Features:
                                 # or a subsurface body is spectral: paths may have a negative channel
     media: bool = False         # volpath with participating media (renderer.media); interface shapes are then
                                 # medium boundaries the path crosses, not alpha cut-outs
+    # Which lobes the materials can reach (renderer.materials.lobe_features); the defaults compile every lobe.
+    multiscatter: bool = True   # some material that may be rough counts the bounces between microfacets
+    layered: bool = True        # some thinfilm takes the layered random walk (coated* always do)
+    smooth: tuple[str, ...] = ()    # types whose every material is smooth: no GGX lobes compiled for them
 
 
 @dataclass
@@ -150,6 +155,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
         mix=any(m.kind == selection.MIX for m in desc.materials),
         dispersion=dispersion or spectral_sss,
         media=media,
+        **lobe_features(desc.materials),
     )
     keep = [geo, mat_keep, tex_keep, light_keep, cam_keep, S.shape_material, S.shape_light, S.shape_flip,
             S.shape_alpha, S.spectral.w, media_up.keep, S.shape_media]

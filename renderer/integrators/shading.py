@@ -2,7 +2,8 @@
 bump-mapped shading frame, and the material dispatch, written once for the path and AOV kernels.
 
 ``shading_functions(features)`` builds (once per feature set) the Warp functions that switch over
-exactly the material types a scene uses, so a kernel calls ``eval_pdf``/``sample`` once per vertex
+exactly the material types a scene uses, each with only the lobes its materials can reach
+(:func:`renderer.materials.hooks`), so a kernel calls ``eval_pdf``/``sample`` once per vertex
 instead of looping over the registry itself."""
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ import warp as wp
 from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import Surface
 from renderer.color.rgb_weights import RgbWeightTable
-from renderer.materials import Materials, dispatch_table
+from renderer.materials import Materials, dispatch_table, hooks
 from renderer.materials.bsdf import BSDF, MAX_SLOTS, BSDFEval, BSDFSample, Slots
 from renderer.sampling.frames import Frame, frame_from_tangent
 from renderer.textures import Textures, texture_eval
@@ -100,8 +101,9 @@ def shading_functions(features: Features) -> Shading:
                 ns = bump_normal(scene, bt, s, ns)
         return frame_from_tangent(ns, s.dpdu)
 
-    return Shading(shading_frame, _switch(tuple(m.eval_pdf for m in mods), kinds, BSDFEval),
-                   _switch(tuple(m.sample for m in mods), kinds, BSDFSample))
+    pairs = [hooks(m, features) for m in mods]   # each material's lobes that the scene can reach
+    return Shading(shading_frame, _switch(tuple(e for e, _ in pairs), kinds, BSDFEval),
+                   _switch(tuple(s for _, s in pairs), kinds, BSDFSample))
 
 
 @lru_cache(maxsize=None)

@@ -7,7 +7,8 @@ defaults: :class:`renderer.parameters.Parameters`), the Warp functions ``eval_pd
 ``layer_rows(values, loc) -> (n, 4) array`` for the scene's layer table, and where it bakes a
 table over the angle of incidence (:mod:`renderer.optics.angular_table`) or, a dispersive
 dielectric, over the wavelength (:mod:`renderer.optics.dispersion`), an optional
-``table_rows(values, loc, thin_film) -> ((n, 4) array, warning)`` (no rows: no table).
+``table_rows(values, loc, thin_film) -> ((n, 4) array, warning)`` (no rows: no table), and where
+some lobes are rare, their absence can be compiled: see :func:`hooks`.
 Registering the module in ``REGISTRY`` is all it takes to add one: parsing, validation, the device layout and the docs table follow from
 ``PARAMS``, and kernels are specialised to the materials a scene uses.
 """
@@ -175,6 +176,50 @@ def with_multiscatter(scene: SceneDescription) -> SceneDescription:
         has = d.kind not in selection.PARAMS and MULTISCATTER in module_of(d.kind, d.loc).PARAMS.by_name
         mats.append(dataclasses.replace(d, values=d.values | {MULTISCATTER: True}) if has else d)
     return dataclasses.replace(scene, materials=mats)
+
+
+def may_be_rough(desc: MaterialDesc) -> bool:
+    """Whether a material with pbrt's roughness parameters can have a rough (GGX) lobe: its
+    ``uroughness`` or ``vroughness`` is a texture or a constant above 0. False for a smooth one
+    (both a constant 0, so alpha is 0 at every point) and for materials without the parameters."""
+    if desc.kind in selection.PARAMS or "uroughness" not in module_of(desc.kind, desc.loc).PARAMS.by_name:
+        return False
+    values = resolve(desc)[0]
+    return any(isinstance(values[k], TextureRef) or values[k] > 0.0 for k in ("uroughness", "vroughness"))
+
+
+def smooth_kinds(descs: list[MaterialDesc]) -> tuple[str, ...]:
+    """The material types with roughness parameters of which every material in ``descs`` is smooth:
+    a kernel needs none of their GGX lobes (``Features.smooth``)."""
+    kinds = {d.kind for d in descs
+             if d.kind not in selection.PARAMS and "uroughness" in module_of(d.kind, d.loc).PARAMS.by_name}
+    return tuple(sorted(kinds - {d.kind for d in descs if may_be_rough(d)}))
+
+
+def lobe_features(descs: list[MaterialDesc]) -> dict[str, Any]:
+    """The fields of :class:`renderer.device.scene.Features` that say which lobes a scene of these
+    materials can reach: ``multiscatter`` (some material that may be rough counts the bounces
+    between microfacets), ``layered`` (some thinfilm takes the layered walk; coateddiffuse and
+    coatedconductor always do) and ``smooth`` (:func:`smooth_kinds`)."""
+    return {"multiscatter": any(multiscatters(d) and may_be_rough(d) for d in descs),
+            "layered": any(d.kind == thinfilm.NAME and thinfilm.walks(d.values) for d in descs),
+            "smooth": smooth_kinds(descs)}
+
+
+def hooks(module: ModuleType, features: Any) -> tuple[wp.Function, wp.Function]:
+    """A material's ``eval_pdf`` and ``sample`` for a kernel of ``features``
+    (:class:`renderer.device.scene.Features`), leaving out the lobes no material of the scene can
+    reach: the module's ``specialised(features)`` where it has one; its ``SMOOTH_LOBES`` where
+    every material of its type is smooth, its ``SINGLE_LOBES`` where none counts the bounces
+    between microfacets; else the functions that handle every case."""
+    specialised = getattr(module, "specialised", None)
+    if specialised is not None:
+        return specialised(features)
+    if module.NAME in features.smooth and hasattr(module, "SMOOTH_LOBES"):
+        return module.SMOOTH_LOBES
+    if not features.multiscatter and hasattr(module, "SINGLE_LOBES"):
+        return module.SINGLE_LOBES
+    return module.eval_pdf, module.sample
 
 
 def first_rows(descs: list[MaterialDesc]) -> list[np.ndarray]:

@@ -16,7 +16,7 @@ from renderer.errors import Location, SceneError
 from renderer.materials.bsdf import BSDF, BSDFEval, BSDFSample
 from renderer.materials.conductor import COPPER_ETA, COPPER_K, artist_k, spectral_fresnel_rows
 from renderer.materials.layered import (CONDUCTOR, DIELECTRIC, FIRST_FREE_FLAG, SLAB_PARAMS, Interface, Slab,
-                                        layered_eval_pdf, layered_sample, make_slab, walk_flags)
+                                        make_slab, walk, walk_flags)
 from renderer.materials.microfacet import REMAP_ROUGHNESS, resolve_roughness, roughness_params, roughness_to_alpha
 from renderer.parameters import Parameter, Parameters
 
@@ -86,11 +86,14 @@ def _slab(b: BSDF) -> Slab:
     return make_slab(top, base, b.p[SLOT.thickness][0], b.p[SLOT.albedo], b.p[SLOT.g][0], b.flags, b.wavelength_u)
 
 
+_walk_eval_pdf, _walk_sample = walk(DIELECTRIC, CONDUCTOR)
+
+
 @wp.func
 def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
-    return layered_eval_pdf(_slab(b), wo, wi)
+    return _walk_eval_pdf(_slab(b), wo, wi)
 
 
 @wp.func
 def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
-    return layered_sample(_slab(b), wo, u)
+    return _walk_sample(_slab(b), wo, u)

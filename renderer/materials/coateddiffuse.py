@@ -9,7 +9,7 @@ import warp as wp
 from renderer.errors import Location
 from renderer.materials.bsdf import BSDF, BSDFEval, BSDFSample
 from renderer.materials.layered import (DIELECTRIC, LAMBERT, SLAB_PARAMS, Interface, Slab,
-                                        layered_eval_pdf, layered_sample, make_slab, walk_flags)
+                                        make_slab, walk, walk_flags)
 from renderer.materials.microfacet import REMAP_ROUGHNESS, resolve_roughness, roughness_params, roughness_to_alpha
 from renderer.parameters import Parameter, Parameters
 
@@ -42,11 +42,14 @@ def _slab(b: BSDF) -> Slab:
     return make_slab(top, base, b.p[SLOT.thickness][0], b.p[SLOT.albedo], b.p[SLOT.g][0], b.flags, b.wavelength_u)
 
 
+_walk_eval_pdf, _walk_sample = walk(DIELECTRIC, LAMBERT)
+
+
 @wp.func
 def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
-    return layered_eval_pdf(_slab(b), wo, wi)
+    return _walk_eval_pdf(_slab(b), wo, wi)
 
 
 @wp.func
 def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
-    return layered_sample(_slab(b), wo, u)
+    return _walk_sample(_slab(b), wo, u)

@@ -175,7 +175,7 @@ def _reflects(r: wp.vec3, t: wp.vec3, sides: int, u: float) -> bool:
 
 
 @wp.func
-def _smooth_sample(c: Coating, eta: float, wo: wp.vec3, u: float, sides: int, radiance: bool) -> BSDFSample:
+def smooth_coating_sample(c: Coating, eta: float, wo: wp.vec3, u: float, sides: int, radiance: bool) -> BSDFSample:
     """The delta mirror or refraction, weighted R / p or T / p (and 1/eta'² in radiance mode)."""
     r, t = coating_rgb(c, wo[2])
     p_r = wp.where(mean3(r) > 0.0, 1.0, 0.0)
@@ -206,7 +206,7 @@ def coating_sample(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, u: wp.ve
     """A reflected or refracted direction (only from ``sides``), smooth or rough (a visible
     microfacet normal, then R or T there); see :func:`coating_eval`."""
     if is_smooth(alpha):
-        return _smooth_sample(c, eta, wo, u[2], sides, radiance)
+        return smooth_coating_sample(c, eta, wo, u[2], sides, radiance)
     wm = ggx_sample_visible(wo, alpha, wp.vec2(u[0], u[1]))
     r, t = coating_rgb(c, wp.dot(wo, wm))
     if mean3(r) + mean3(t) <= 0.0:

@@ -130,11 +130,17 @@ def conductor_eval(eta: wp.vec3, k: wp.vec3, alpha: wp.vec2, wo: wp.vec3, wi: wp
 
 
 @wp.func
+def mirror_sample(eta: wp.vec3, k: wp.vec3, wo: wp.vec3, rows: wp.array(dtype=wp.vec4), table: int) -> BSDFSample:
+    """The smooth conductor's delta reflection."""
+    return delta_sample(reflect_z(wo), conductor_fresnel(wo[2], eta, k, rows, table), 1.0, REFLECTION | SPECULAR)
+
+
+@wp.func
 def conductor_sample(eta: wp.vec3, k: wp.vec3, alpha: wp.vec2, wo: wp.vec3, u: wp.vec3,
                      rows: wp.array(dtype=wp.vec4), table: int) -> BSDFSample:
     """A mirror direction (smooth) or a GGX visible-normal reflection (rough)."""
     if is_smooth(alpha):
-        return delta_sample(reflect_z(wo), conductor_fresnel(wo[2], eta, k, rows, table), 1.0, REFLECTION | SPECULAR)
+        return mirror_sample(eta, k, wo, rows, table)
     wi = reflected(wo, alpha, u, 0.0)
     if wi[2] == 0.0:
         return failed_sample()
@@ -220,3 +226,37 @@ def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
     if (b.flags & FLAG.multiscatter) != 0:
         return conductor_ms_sample(_eta(b), _k(b), _alpha(b), wo, u, b.layers, b.table_first)
     return conductor_sample(_eta(b), _k(b), _alpha(b), wo, u, b.layers, b.table_first)
+
+
+# Kernels compile only the lobes their scene's conductors can reach (renderer.materials.hooks):
+# the functions above handle every case and are what the tests and other materials call.
+
+
+@wp.func
+def single_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+    """``eval_pdf`` where no conductor counts the bounces between microfacets."""
+    return conductor_eval(_eta(b), _k(b), _alpha(b), wo, wi, b.layers, b.table_first)
+
+
+@wp.func
+def single_sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+    """``sample`` where no conductor counts the bounces between microfacets."""
+    return conductor_sample(_eta(b), _k(b), _alpha(b), wo, u, b.layers, b.table_first)
+
+
+@wp.func
+def smooth_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+    """``eval_pdf`` where every conductor is a mirror: a delta lobe, no value anywhere."""
+    return BSDFEval()
+
+
+@wp.func
+def smooth_sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+    """``sample`` where every conductor is a mirror."""
+    return mirror_sample(_eta(b), _k(b), wo, b.layers, b.table_first)
+
+
+#: The lobes of a kernel where every conductor is smooth, and where none counts the bounces between
+#: microfacets (picked by :func:`renderer.materials.hooks`).
+SMOOTH_LOBES = (smooth_eval_pdf, smooth_sample)
+SINGLE_LOBES = (single_eval_pdf, single_sample)

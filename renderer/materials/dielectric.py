@@ -119,24 +119,30 @@ def dielectric_eval(eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3, sides:
 
 
 @wp.func
+def smooth_sample(eta: float, wo: wp.vec3, u: float, sides: int, radiance: bool) -> BSDFSample:
+    """The smooth interface's delta reflection or refraction (only from ``sides``), chosen by Fresnel."""
+    R = fresnel_dielectric(wo[2], eta)
+    P = _choice(R, sides)
+    if _reflects(R, sides, u):
+        if P[0] == 0.0:
+            return failed_sample()
+        return delta_sample(reflect_z(wo), wp.vec3(R / P[0]), P[0], REFLECTION | SPECULAR)
+    t = refract(wo, wp.vec3(0.0, 0.0, 1.0), eta)
+    if t[3] == 0.0 or P[1] == 0.0:
+        return failed_sample()
+    w = (1.0 - R) / P[1]
+    if radiance:
+        w = w / (t[3] * t[3])
+    s = delta_sample(wp.vec3(t[0], t[1], t[2]), wp.vec3(w), P[1], TRANSMISSION | SPECULAR)
+    s.eta = t[3]
+    return s
+
+
+@wp.func
 def dielectric_sample(eta: float, alpha: wp.vec2, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
     """A reflected or refracted direction (only from ``sides``), smooth or rough; see dielectric_eval."""
     if eta == 1.0 or is_smooth(alpha):
-        R = fresnel_dielectric(wo[2], eta)
-        P = _choice(R, sides)
-        if _reflects(R, sides, u[2]):
-            if P[0] == 0.0:
-                return failed_sample()
-            return delta_sample(reflect_z(wo), wp.vec3(R / P[0]), P[0], REFLECTION | SPECULAR)
-        t = refract(wo, wp.vec3(0.0, 0.0, 1.0), eta)
-        if t[3] == 0.0 or P[1] == 0.0:
-            return failed_sample()
-        w = (1.0 - R) / P[1]
-        if radiance:
-            w = w / (t[3] * t[3])
-        s = delta_sample(wp.vec3(t[0], t[1], t[2]), wp.vec3(w), P[1], TRANSMISSION | SPECULAR)
-        s.eta = t[3]
-        return s
+        return smooth_sample(eta, wo, u[2], sides, radiance)
     wm = ggx_sample_visible(wo, alpha, wp.vec2(u[0], u[1]))
     R = fresnel_dielectric(wp.dot(wo, wm), eta)
     wi = wp.vec3(0.0)
@@ -215,3 +221,37 @@ def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
     if (b.flags & FLAG.multiscatter) != 0:
         return dielectric_ms_sample(b.p[SLOT.eta][0], _alpha(b), wo, u, True, b.layers)
     return dielectric_sample(b.p[SLOT.eta][0], _alpha(b), wo, u, REFLECTION | TRANSMISSION, True)
+
+
+# Kernels compile only the lobes their scene's dielectrics can reach (renderer.materials.hooks):
+# the functions above handle every case and are what the tests and other materials call.
+
+
+@wp.func
+def single_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+    """``eval_pdf`` where no dielectric counts the bounces between microfacets."""
+    return dielectric_eval(b.p[SLOT.eta][0], _alpha(b), wo, wi, REFLECTION | TRANSMISSION, True)
+
+
+@wp.func
+def single_sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+    """``sample`` where no dielectric counts the bounces between microfacets."""
+    return dielectric_sample(b.p[SLOT.eta][0], _alpha(b), wo, u, REFLECTION | TRANSMISSION, True)
+
+
+@wp.func
+def smooth_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+    """``eval_pdf`` where every dielectric is smooth: delta lobes only, no value anywhere."""
+    return BSDFEval()
+
+
+@wp.func
+def smooth_only_sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+    """``sample`` where every dielectric is smooth."""
+    return smooth_sample(b.p[SLOT.eta][0], wo, u[2], REFLECTION | TRANSMISSION, True)
+
+
+#: The lobes of a kernel where every dielectric is smooth, and where none counts the bounces between
+#: microfacets (picked by :func:`renderer.materials.hooks`).
+SMOOTH_LOBES = (smooth_eval_pdf, smooth_only_sample)
+SINGLE_LOBES = (single_eval_pdf, single_sample)

@@ -32,8 +32,8 @@ import numpy as np
 import warp as wp
 
 from renderer.materials import dielectric
-from renderer.materials.bsdf import (BSDF, DIFFUSE, FIRST_DERIVED_FLAG, GLOSSY, BSDFEval, BSDFSample, Slots,
-                                     failed_sample, sampled, signed_z)
+from renderer.materials.bsdf import (BSDF, DIFFUSE, FIRST_DERIVED_FLAG, GLOSSY, REFLECTION, TRANSMISSION, BSDFEval,
+                                     BSDFSample, failed_sample, sampled, signed_z)
 from renderer.materials.microfacet import ggx_D, ggx_G, ggx_G1, ggx_sample_visible, ggx_visible_pdf, gtr1_D, gtr1_sample
 from renderer.optics.fresnel import fresnel_dielectric
 from renderer.parameters import Parameter, Parameters, TextureRef
@@ -225,18 +225,6 @@ def _exit_lobe(i: wp.vec3) -> wp.vec3:
 
 
 @wp.func
-def _glass(P: Params) -> BSDF:
-    """The rough dielectric of the specular transmission, as a :mod:`dielectric` BSDF."""
-    g = BSDF()
-    p = Slots()
-    p[dielectric.SLOT.eta, 0] = P.eta
-    p[dielectric.SLOT.uroughness, 0] = P.alpha[0]
-    p[dielectric.SLOT.vroughness, 0] = P.alpha[1]
-    g.p = p  # flags stay 0 (no remaproughness): these are alphas already
-    return g
-
-
-@wp.func
 def _weights(P: Params, wo: wp.vec3) -> vec5:
     """Unnormalised lobe-selection weights (diffuse group, specular, clearcoat, specular
     transmission, diffuse transmission): rough estimates of each lobe's albedo at wo."""
@@ -346,7 +334,7 @@ def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
     i = signed_z(wi, P.sgn)
     glass = BSDFEval()
     if P.gw > 0.0 and not P.thin and not P.exit:
-        glass = dielectric.eval_pdf(_glass(P), wo, wi)
+        glass = dielectric.dielectric_eval(P.eta, P.alpha, wo, wi, REFLECTION | TRANSMISSION, True)
     ev = BSDFEval()
     ev.f = _value(P, wo, wi, P.o, i, glass)
     ev.pdf = _density(P, _probabilities(P, wo), P.o, i, glass)
@@ -384,7 +372,8 @@ def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
         else:
             # reuse the lobe-selection number, rescaled, for the dielectric's reflect/refract choice
             v = wp.clamp((x - p[0] - p[1] - p[2]) / p[3], 0.0, 0.999999)
-            g = dielectric.sample(_glass(P), wo, wp.vec3(u[0], u[1], v))
+            g = dielectric.dielectric_sample(P.eta, P.alpha, wo, wp.vec3(u[0], u[1], v), REFLECTION | TRANSMISSION,
+                                             True)
             if g.pdf <= 0.0:
                 return failed_sample()
             i = signed_z(g.wi, sgn)

@@ -18,21 +18,24 @@ Estimates are stochastic but deterministic: each call seeds its own RNG from a h
 directions and of the BSDF's per-sample ``wavelength_u``, so the same seed renders the same image
 and two samples of one pixel use independent walks.
 
-Interfaces are chosen by a small integer kind (Warp has no function pointers): ``iface_eval``,
-``iface_sample`` and ``iface_specular`` are the only places that branch on it. FILM is a thin film
+Interfaces are of a small integer kind (Warp has no function pointers). Each material walks
+between a top and a bottom of fixed kinds, so :func:`walk` builds its functions from the two kinds'
+entries of ``INTERFACES`` and nothing branches on a kind at run time: a kernel compiles the lobes
+of the kinds its materials walk between, not of every kind. FILM is a thin film
 or multilayer stack (``thinfilm``'s coating, :mod:`.coating`) whose Fresnel term is an RGB R and T
 per direction: smooth, it reflects with probability mean(R) / (mean R + mean T); rough, it is the
 GGX pair with those R and T at the half-vector.
 """
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Any
 
 import warp as wp
 
 from renderer.materials.bsdf import (DIFFUSE, FIRST_DERIVED_FLAG, GLOSSY, REFLECTION, SPECULAR, TRANSMISSION,
                                      BSDFEval, BSDFSample, failed_sample)
-from renderer.materials.coating import Coating, coating_eval, coating_sample
+from renderer.materials.coating import Coating, coating_eval, coating_sample, smooth_coating_sample
 from renderer.materials.conductor import conductor_eval, conductor_sample
 from renderer.materials.dielectric import dielectric_eval, dielectric_sample
 from renderer.materials.diffuse import lambert_eval, lambert_sample
@@ -116,45 +119,100 @@ def make_slab(top: Interface, bottom: Interface, thickness: float, albedo: wp.ve
     return L
 
 
+# Interfaces, one kind at a time: each material's walk has a fixed top and bottom kind
+# (:func:`walk`), so a kernel compiles only the lobes of the kinds it walks between.
+
+
 @wp.func
-def iface_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
-    """f(wo, wi) and the density of ``iface_sample`` restricted to ``sides``."""
-    if s.kind == DIELECTRIC:
-        return dielectric_eval(s.eta[0], s.alpha, wo, wi, sides, radiance)
-    if s.kind == FILM:
-        return coating_eval(s.coat, s.eta[0], s.alpha, wo, wi, sides, radiance)
-    ev = BSDFEval()
+def _dielectric_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
+    return dielectric_eval(s.eta[0], s.alpha, wo, wi, sides, radiance)
+
+
+@wp.func
+def _dielectric_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
+    return dielectric_sample(s.eta[0], s.alpha, wo, u, sides, radiance)
+
+
+@wp.func
+def _dielectric_specular(s: Interface) -> bool:
+    return s.eta[0] == 1.0 or is_smooth(s.alpha)
+
+
+@wp.func
+def _film_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
+    return coating_eval(s.coat, s.eta[0], s.alpha, wo, wi, sides, radiance)
+
+
+@wp.func
+def _film_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
+    return coating_sample(s.coat, s.eta[0], s.alpha, wo, u, sides, radiance)
+
+
+@wp.func
+def _rough_specular(s: Interface) -> bool:
+    return is_smooth(s.alpha)
+
+
+@wp.func
+def _smooth_film_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
+    """A smooth coating's lobes are deltas: no value (``coating_eval`` at alpha 0)."""
+    return BSDFEval()
+
+
+@wp.func
+def _smooth_film_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
+    return smooth_coating_sample(s.coat, s.eta[0], wo, u[2], sides, radiance)
+
+
+@wp.func
+def _specular(s: Interface) -> bool:
+    return True
+
+
+@wp.func
+def _lambert_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
     if (sides & REFLECTION) == 0:
-        return ev
-    if s.kind == LAMBERT:
-        ev = lambert_eval(s.albedo, wo, wi)
-    else:
-        ev = conductor_eval(s.eta, s.k, s.alpha, wo, wi, s.coat.layers, s.coat.table_first)
-    return ev
+        return BSDFEval()
+    return lambert_eval(s.albedo, wo, wi)
 
 
 @wp.func
-def iface_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
-    """A direction from the interface's lobes on ``sides`` (pbrt's BxDFReflTransFlags)."""
-    if s.kind == DIELECTRIC:
-        return dielectric_sample(s.eta[0], s.alpha, wo, u, sides, radiance)
-    if s.kind == FILM:
-        return coating_sample(s.coat, s.eta[0], s.alpha, wo, u, sides, radiance)
+def _lambert_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
     if (sides & REFLECTION) == 0:
         return failed_sample()
-    if s.kind == LAMBERT:
-        return lambert_sample(s.albedo, wo, u)
+    return lambert_sample(s.albedo, wo, u)
+
+
+@wp.func
+def _diffuse(s: Interface) -> bool:
+    return False
+
+
+@wp.func
+def _conductor_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
+    if (sides & REFLECTION) == 0:
+        return BSDFEval()
+    return conductor_eval(s.eta, s.k, s.alpha, wo, wi, s.coat.layers, s.coat.table_first)
+
+
+@wp.func
+def _conductor_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
+    if (sides & REFLECTION) == 0:
+        return failed_sample()
     return conductor_sample(s.eta, s.k, s.alpha, wo, u, s.coat.layers, s.coat.table_first)
 
 
-@wp.func
-def iface_specular(s: Interface) -> bool:
-    """A delta interface: it cannot be reached by next-event estimation, so the walk skips that."""
-    if s.kind == LAMBERT:
-        return False
-    if s.kind == DIELECTRIC and s.eta[0] == 1.0:
-        return True
-    return is_smooth(s.alpha)
+#: Per (kind, smooth) the interface's f and density restricted to ``sides`` (pbrt's
+#: BxDFReflTransFlags), its sampling, and whether it is a delta interface (which next-event
+#: estimation cannot reach, so the walk skips that). ``smooth``: every such interface of the
+#: kernel's materials has alpha 0 (a FILM of a smooth thinfilm).
+INTERFACES = {
+    (DIELECTRIC, False): (_dielectric_eval, _dielectric_sample, _dielectric_specular),
+    (FILM, False): (_film_eval, _film_sample, _rough_specular),
+    (FILM, True): (_smooth_film_eval, _smooth_film_sample, _specular),
+    (LAMBERT, False): (_lambert_eval, _lambert_sample, _diffuse),
+    (CONDUCTOR, False): (_conductor_eval, _conductor_sample, _rough_specular),
+}
 
 
 @wp.func
@@ -189,144 +247,9 @@ def walk_rng(a: wp.vec3, c: wp.vec3, seed: float) -> wp.uint32:
 
 
 @wp.func
-def _exit_pdf(L: Slab, wi: wp.vec3, w: wp.vec3) -> float:
-    """The density with which the exit strategy (a direction sampled through the top from wi)
-    picks the inside direction w: the MIS partner of a walk vertex that continues along w. pbrt
-    uses the top's density of wi given -w here instead, a different measure, so its weights do
-    not sum to 1 and its f runs some 5-10 % above its own sampling for rough coats."""
-    return iface_eval(L.top, wi, -w, TRANSMISSION, False).pdf
-
-
-@wp.func
 def _up(wo: wp.vec3) -> float:
     """Two-sided: the sign that brings wo above the surface."""
     return wp.where(wo[2] < 0.0, -1.0, 1.0)
-
-
-@wp.func
-def layered_f(L: Slab, wo_in: wp.vec3, wi_in: wp.vec3) -> wp.vec3:
-    """pbrt's stochastic estimate of f(wo, wi) (see the module docstring), for an opaque base:
-    light leaves through the top, so wi below wo's side gives 0."""
-    sgn = _up(wo_in)
-    wo = wo_in * sgn
-    wi = wi_in * sgn
-    if wi[2] <= 0.0 or wo[2] == 0.0:
-        return wp.vec3(0.0)
-    thick = wp.max(L.thickness, MIN_THICKNESS)
-    n = wp.max(L.n_samples, 1)
-    top_specular = iface_specular(L.top)
-    base_specular = iface_specular(L.bottom)
-    scatters = max3(L.albedo) > 0.0
-    f = iface_eval(L.top, wo, wi, BOTH, True).f * float(n)
-    rng = walk_rng(wo, wi, L.seed)
-    for _s in range(n):
-        wos = iface_sample(L.top, wo, wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)), TRANSMISSION, True)
-        wis = iface_sample(L.top, wi, wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)), TRANSMISSION, False)
-        if _ok(wos) and _ok(wis):
-            beta = wos.weight
-            z = thick
-            w = wos.wi
-            wis_f = wis.weight / wp.abs(wis.wi[2])      # f / pdf of the exit direction, without its cosine
-            for depth in range(L.max_depth):
-                if depth > 3 and max3(beta) < 0.25:
-                    q = wp.max(0.0, 1.0 - max3(beta))
-                    if wp.randf(rng) < q:
-                        break
-                    beta = beta / (1.0 - q)
-                if not scatters:
-                    z = wp.where(z == thick, 0.0, thick)
-                    beta = beta * _tr(thick, w)
-                else:
-                    dz = -wp.log(1.0 - wp.min(wp.randf(rng), 0.99999994)) * wp.abs(w[2])
-                    zp = wp.where(w[2] > 0.0, z + dz, z - dz)
-                    if zp == z:
-                        continue
-                    if zp > 0.0 and zp < thick:
-                        # a scattering event in the slab: connect to the exit direction, then scatter
-                        wt = float(1.0)
-                        if not top_specular:
-                            wt = power_heuristic(wis.pdf, hg_phase(-w, -wis.wi, L.g))
-                        f += wp.cw_mul(wp.cw_mul(beta, L.albedo), wis_f) * (hg_phase(-w, -wis.wi, L.g) * wt
-                                                                            * _tr(zp - thick, wis.wi))
-                        wn = hg_sample(-w, L.g, wp.vec2(wp.randf(rng), wp.randf(rng)))
-                        if wn[2] == 0.0:
-                            continue
-                        p_phase = hg_phase(-w, wn, L.g)
-                        beta = wp.cw_mul(beta, L.albedo)
-                        w = wn
-                        z = zp
-                        if w[2] > 0.0 and not top_specular:
-                            ex = iface_eval(L.top, -w, wi, TRANSMISSION, True)
-                            if max3(ex.f) > 0.0:
-                                wt = power_heuristic(p_phase, _exit_pdf(L, wi, w))
-                                f += wp.cw_mul(beta, ex.f) * (_tr(zp - thick, w) * wt)
-                        continue
-                    z = wp.clamp(zp, 0.0, thick)
-                if z == thick:
-                    # internal reflection at the top
-                    bs = iface_sample(L.top, -w, wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)), REFLECTION,
-                                      True)
-                    if not _ok(bs):
-                        break
-                    beta = wp.cw_mul(beta, bs.weight)
-                    w = bs.wi
-                else:
-                    # the base: connect to the exit direction, then reflect
-                    if not base_specular:
-                        eb = iface_eval(L.bottom, -w, -wis.wi, BOTH, True)
-                        wt = float(1.0)
-                        if not top_specular:
-                            wt = power_heuristic(wis.pdf, eb.pdf)
-                        f += wp.cw_mul(wp.cw_mul(beta, eb.f), wis.weight) * (wt * _tr(thick, wis.wi))
-                    bs = iface_sample(L.bottom, -w, wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)), REFLECTION,
-                                      True)
-                    if not _ok(bs):
-                        break
-                    beta = wp.cw_mul(beta, bs.weight)
-                    w = bs.wi
-                    if not top_specular:
-                        ex = iface_eval(L.top, -w, wi, TRANSMISSION, True)
-                        if max3(ex.f) > 0.0:
-                            wt = float(1.0)
-                            if not base_specular:
-                                wt = power_heuristic(bs.pdf, _exit_pdf(L, wi, w))
-                            f += wp.cw_mul(beta, ex.f) * (_tr(thick, bs.wi) * wt)
-    return f / float(n)
-
-
-@wp.func
-def layered_pdf(L: Slab, wo_in: wp.vec3, wi_in: wp.vec3) -> float:
-    """pbrt's approximate density of ``layered_sample`` at wi: the top's reflection lobe plus one
-    transmit-reflect-transmit bounce (MIS-combined when both interfaces are rough), mixed with a
-    uniform density (10 %). wi below wo's side gets only the uniform part."""
-    sgn = _up(wo_in)
-    wo = wo_in * sgn
-    wi = wi_in * sgn
-    n = wp.max(L.n_samples, 1)
-    total = float(0.0)
-    if wo[2] * wi[2] > 0.0:
-        total = iface_eval(L.top, wo, wi, REFLECTION, True).pdf * float(n)
-        top_specular = iface_specular(L.top)
-        base_specular = iface_specular(L.bottom)
-        rng = walk_rng(wi, wo, L.seed)
-        for _s in range(n):
-            wos = iface_sample(L.top, wo, wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)), TRANSMISSION, True)
-            wis = iface_sample(L.top, wi, wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)), TRANSMISSION, False)
-            if wos.pdf > 0.0 and max3(wos.weight) > 0.0 and wis.pdf > 0.0 and max3(wis.weight) > 0.0:
-                if top_specular:
-                    total += iface_eval(L.bottom, -wos.wi, -wis.wi, BOTH, True).pdf
-                else:
-                    rs = iface_sample(L.bottom, -wos.wi, wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)), BOTH,
-                                      True)
-                    if rs.pdf > 0.0 and max3(rs.weight) > 0.0:
-                        if base_specular:
-                            total += iface_eval(L.top, -rs.wi, wi, BOTH, True).pdf
-                        else:
-                            p_r = iface_eval(L.bottom, -wos.wi, -wis.wi, BOTH, True).pdf
-                            total += power_heuristic(wis.pdf, p_r) * p_r
-                            p_t = iface_eval(L.top, -rs.wi, wi, BOTH, True).pdf
-                            total += power_heuristic(rs.pdf, p_t) * p_t
-    return 0.1 / (4.0 * PI) + 0.9 * total / float(n)
 
 
 @wp.func
@@ -340,83 +263,231 @@ def _walk_flags(L: Slab, specular: bool) -> int:
     return REFLECTION | GLOSSY
 
 
-@wp.func
-def layered_sample(L: Slab, wo_in: wp.vec3, u: wp.vec3) -> BSDFSample:
-    """pbrt's random walk: reflect off the top, or refract in and walk until the path leaves
-    through the top (or is absorbed, ends by roulette or reaches max_depth: a failed sample)."""
-    sgn = _up(wo_in)
-    wo = wo_in * sgn
-    bs = iface_sample(L.top, wo, u, BOTH, True)
-    if not _ok(bs):
-        return failed_sample()
-    if bs.wi[2] > 0.0:
-        bs.wi = bs.wi * sgn
-        if (bs.flags & SPECULAR) == 0:
-            bs.pdf = layered_pdf(L, wo_in, bs.wi)
-        return bs
-    thick = wp.max(L.thickness, MIN_THICKNESS)
-    scatters = max3(L.albedo) > 0.0
-    specular = (bs.flags & SPECULAR) != 0
-    beta = bs.weight
-    w = bs.wi
-    z = thick
-    rng = walk_rng(wo, u, L.seed)
-    for depth in range(L.max_depth):
-        if depth > 3 and max3(beta) < 0.25:
-            q = wp.max(0.0, 1.0 - max3(beta))
-            if wp.randf(rng) < q:
-                return failed_sample()
-            beta = beta / (1.0 - q)
-        if w[2] == 0.0:
+@lru_cache(maxsize=None)
+def walk(top: int, bottom: int, top_smooth: bool = False) -> tuple[wp.Function, wp.Function]:
+    """The random walk between a ``top`` and a ``bottom`` interface of these kinds (``top_smooth``:
+    every top of the kernel's materials of this kind has alpha 0): ``(eval_pdf(L, wo, wi) ->
+    BSDFEval, sample(L, wo, u) -> BSDFSample)`` of a :class:`Slab`, as a material's ``eval_pdf``
+    and ``sample``."""
+    top_f, top_sample, top_delta = INTERFACES[(top, top_smooth)]
+    base_f, base_sample, base_delta = INTERFACES[(bottom, False)]
+
+    @wp.func
+    def exit_pdf(L: Slab, wi: wp.vec3, w: wp.vec3) -> float:
+        """The density with which the exit strategy (a direction sampled through the top from wi)
+        picks the inside direction w: the MIS partner of a walk vertex that continues along w. pbrt
+        uses the top's density of wi given -w here instead, a different measure, so its weights do
+        not sum to 1 and its f runs some 5-10 % above its own sampling for rough coats."""
+        return wp.static(top_f)(L.top, wi, -w, TRANSMISSION, False).pdf
+
+    @wp.func
+    def layered_f(L: Slab, wo_in: wp.vec3, wi_in: wp.vec3) -> wp.vec3:
+        """pbrt's stochastic estimate of f(wo, wi) (see the module docstring), for an opaque base:
+        light leaves through the top, so wi below wo's side gives 0."""
+        sgn = _up(wo_in)
+        wo = wo_in * sgn
+        wi = wi_in * sgn
+        if wi[2] <= 0.0 or wo[2] == 0.0:
+            return wp.vec3(0.0)
+        thick = wp.max(L.thickness, MIN_THICKNESS)
+        n = wp.max(L.n_samples, 1)
+        top_specular = wp.static(top_delta)(L.top)
+        base_specular = wp.static(base_delta)(L.bottom)
+        scatters = max3(L.albedo) > 0.0
+        f = wp.static(top_f)(L.top, wo, wi, BOTH, True).f * float(n)
+        rng = walk_rng(wo, wi, L.seed)
+        for _s in range(n):
+            wos = wp.static(top_sample)(L.top, wo,
+                                        wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)), TRANSMISSION, True)
+            wis = wp.static(top_sample)(L.top, wi,
+                                        wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)), TRANSMISSION, False)
+            if _ok(wos) and _ok(wis):
+                beta = wos.weight
+                z = thick
+                w = wos.wi
+                wis_f = wis.weight / wp.abs(wis.wi[2])      # f / pdf of the exit direction, without its cosine
+                for depth in range(L.max_depth):
+                    if depth > 3 and max3(beta) < 0.25:
+                        q = wp.max(0.0, 1.0 - max3(beta))
+                        if wp.randf(rng) < q:
+                            break
+                        beta = beta / (1.0 - q)
+                    if not scatters:
+                        z = wp.where(z == thick, 0.0, thick)
+                        beta = beta * _tr(thick, w)
+                    else:
+                        dz = -wp.log(1.0 - wp.min(wp.randf(rng), 0.99999994)) * wp.abs(w[2])
+                        zp = wp.where(w[2] > 0.0, z + dz, z - dz)
+                        if zp == z:
+                            continue
+                        if zp > 0.0 and zp < thick:
+                            # a scattering event in the slab: connect to the exit direction, then scatter
+                            wt = float(1.0)
+                            if not top_specular:
+                                wt = power_heuristic(wis.pdf, hg_phase(-w, -wis.wi, L.g))
+                            f += wp.cw_mul(wp.cw_mul(beta, L.albedo), wis_f) * (hg_phase(-w, -wis.wi, L.g) * wt
+                                                                                * _tr(zp - thick, wis.wi))
+                            wn = hg_sample(-w, L.g, wp.vec2(wp.randf(rng), wp.randf(rng)))
+                            if wn[2] == 0.0:
+                                continue
+                            p_phase = hg_phase(-w, wn, L.g)
+                            beta = wp.cw_mul(beta, L.albedo)
+                            w = wn
+                            z = zp
+                            if w[2] > 0.0 and not top_specular:
+                                ex = wp.static(top_f)(L.top, -w, wi, TRANSMISSION, True)
+                                if max3(ex.f) > 0.0:
+                                    wt = power_heuristic(p_phase, wp.static(exit_pdf)(L, wi, w))
+                                    f += wp.cw_mul(beta, ex.f) * (_tr(zp - thick, w) * wt)
+                            continue
+                        z = wp.clamp(zp, 0.0, thick)
+                    if z == thick:
+                        # internal reflection at the top
+                        bs = wp.static(top_sample)(L.top, -w,
+                                                   wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)),
+                                                   REFLECTION, True)
+                        if not _ok(bs):
+                            break
+                        beta = wp.cw_mul(beta, bs.weight)
+                        w = bs.wi
+                    else:
+                        # the base: connect to the exit direction, then reflect
+                        if not base_specular:
+                            eb = wp.static(base_f)(L.bottom, -w, -wis.wi, BOTH, True)
+                            wt = float(1.0)
+                            if not top_specular:
+                                wt = power_heuristic(wis.pdf, eb.pdf)
+                            f += wp.cw_mul(wp.cw_mul(beta, eb.f), wis.weight) * (wt * _tr(thick, wis.wi))
+                        bs = wp.static(base_sample)(L.bottom, -w,
+                                                    wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)),
+                                                    REFLECTION, True)
+                        if not _ok(bs):
+                            break
+                        beta = wp.cw_mul(beta, bs.weight)
+                        w = bs.wi
+                        if not top_specular:
+                            ex = wp.static(top_f)(L.top, -w, wi, TRANSMISSION, True)
+                            if max3(ex.f) > 0.0:
+                                wt = float(1.0)
+                                if not base_specular:
+                                    wt = power_heuristic(bs.pdf, wp.static(exit_pdf)(L, wi, w))
+                                f += wp.cw_mul(beta, ex.f) * (_tr(thick, bs.wi) * wt)
+        return f / float(n)
+
+    @wp.func
+    def layered_pdf(L: Slab, wo_in: wp.vec3, wi_in: wp.vec3) -> float:
+        """pbrt's approximate density of ``layered_sample`` at wi: the top's reflection lobe plus one
+        transmit-reflect-transmit bounce (MIS-combined when both interfaces are rough), mixed with a
+        uniform density (10 %). wi below wo's side gets only the uniform part."""
+        sgn = _up(wo_in)
+        wo = wo_in * sgn
+        wi = wi_in * sgn
+        n = wp.max(L.n_samples, 1)
+        total = float(0.0)
+        if wo[2] * wi[2] > 0.0:
+            total = wp.static(top_f)(L.top, wo, wi, REFLECTION, True).pdf * float(n)
+            top_specular = wp.static(top_delta)(L.top)
+            base_specular = wp.static(base_delta)(L.bottom)
+            rng = walk_rng(wi, wo, L.seed)
+            for _s in range(n):
+                wos = wp.static(top_sample)(L.top, wo,
+                                            wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)), TRANSMISSION, True)
+                wis = wp.static(top_sample)(L.top, wi,
+                                            wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)), TRANSMISSION, False)
+                if wos.pdf > 0.0 and max3(wos.weight) > 0.0 and wis.pdf > 0.0 and max3(wis.weight) > 0.0:
+                    if top_specular:
+                        total += wp.static(base_f)(L.bottom, -wos.wi, -wis.wi, BOTH, True).pdf
+                    else:
+                        rs = wp.static(base_sample)(L.bottom, -wos.wi,
+                                                    wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)), BOTH, True)
+                        if rs.pdf > 0.0 and max3(rs.weight) > 0.0:
+                            if base_specular:
+                                total += wp.static(top_f)(L.top, -rs.wi, wi, BOTH, True).pdf
+                            else:
+                                p_r = wp.static(base_f)(L.bottom, -wos.wi, -wis.wi, BOTH, True).pdf
+                                total += power_heuristic(wis.pdf, p_r) * p_r
+                                p_t = wp.static(top_f)(L.top, -rs.wi, wi, BOTH, True).pdf
+                                total += power_heuristic(rs.pdf, p_t) * p_t
+        return 0.1 / (4.0 * PI) + 0.9 * total / float(n)
+
+    @wp.func
+    def layered_sample(L: Slab, wo_in: wp.vec3, u: wp.vec3) -> BSDFSample:
+        """pbrt's random walk: reflect off the top, or refract in and walk until the path leaves
+        through the top (or is absorbed, ends by roulette or reaches max_depth: a failed sample)."""
+        sgn = _up(wo_in)
+        wo = wo_in * sgn
+        bs = wp.static(top_sample)(L.top, wo, u, BOTH, True)
+        if not _ok(bs):
             return failed_sample()
-        at_boundary = True
-        if scatters:
-            dz = -wp.log(1.0 - wp.min(wp.randf(rng), 0.99999994)) * wp.abs(w[2])
-            zp = wp.where(w[2] > 0.0, z + dz, z - dz)
-            if zp == z:
-                return failed_sample()
-            if zp > 0.0 and zp < thick:
-                wn = hg_sample(-w, L.g, wp.vec2(wp.randf(rng), wp.randf(rng)))
-                if wn[2] == 0.0:
+        if bs.wi[2] > 0.0:
+            bs.wi = bs.wi * sgn
+            if (bs.flags & SPECULAR) == 0:
+                bs.pdf = wp.static(layered_pdf)(L, wo_in, bs.wi)
+            return bs
+        thick = wp.max(L.thickness, MIN_THICKNESS)
+        scatters = max3(L.albedo) > 0.0
+        specular = (bs.flags & SPECULAR) != 0
+        beta = bs.weight
+        w = bs.wi
+        z = thick
+        rng = walk_rng(wo, u, L.seed)
+        for depth in range(L.max_depth):
+            if depth > 3 and max3(beta) < 0.25:
+                q = wp.max(0.0, 1.0 - max3(beta))
+                if wp.randf(rng) < q:
                     return failed_sample()
-                beta = wp.cw_mul(beta, L.albedo)
-                specular = False
-                w = wn
-                z = zp
-                at_boundary = False
-            else:
-                z = wp.clamp(zp, 0.0, thick)
-        else:
-            z = wp.where(z == thick, 0.0, thick)
-            beta = beta * _tr(thick, w)
-        if at_boundary:
-            u3 = wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng))
-            s = BSDFSample()
-            if z == thick:
-                s = iface_sample(L.top, -w, u3, BOTH, True)
-            else:
-                s = iface_sample(L.bottom, -w, u3, BOTH, True)
-            if not _ok(s):
+                beta = beta / (1.0 - q)
+            if w[2] == 0.0:
                 return failed_sample()
-            beta = wp.cw_mul(beta, s.weight)
-            specular = specular and (s.flags & SPECULAR) != 0
-            w = s.wi
-            if (s.flags & TRANSMISSION) != 0:
-                out = BSDFSample()
-                out.wi = w * sgn
-                out.weight = beta
-                out.flags = _walk_flags(L, specular)
-                out.pdf = 1.0
-                if not specular:
-                    out.pdf = layered_pdf(L, wo_in, out.wi)
-                return out
-    return failed_sample()
+            at_boundary = True
+            if scatters:
+                dz = -wp.log(1.0 - wp.min(wp.randf(rng), 0.99999994)) * wp.abs(w[2])
+                zp = wp.where(w[2] > 0.0, z + dz, z - dz)
+                if zp == z:
+                    return failed_sample()
+                if zp > 0.0 and zp < thick:
+                    wn = hg_sample(-w, L.g, wp.vec2(wp.randf(rng), wp.randf(rng)))
+                    if wn[2] == 0.0:
+                        return failed_sample()
+                    beta = wp.cw_mul(beta, L.albedo)
+                    specular = False
+                    w = wn
+                    z = zp
+                    at_boundary = False
+                else:
+                    z = wp.clamp(zp, 0.0, thick)
+            else:
+                z = wp.where(z == thick, 0.0, thick)
+                beta = beta * _tr(thick, w)
+            if at_boundary:
+                u3 = wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng))
+                s = BSDFSample()
+                if z == thick:
+                    s = wp.static(top_sample)(L.top, -w, u3, BOTH, True)
+                else:
+                    s = wp.static(base_sample)(L.bottom, -w, u3, BOTH, True)
+                if not _ok(s):
+                    return failed_sample()
+                beta = wp.cw_mul(beta, s.weight)
+                specular = specular and (s.flags & SPECULAR) != 0
+                w = s.wi
+                if (s.flags & TRANSMISSION) != 0:
+                    out = BSDFSample()
+                    out.wi = w * sgn
+                    out.weight = beta
+                    out.flags = _walk_flags(L, specular)
+                    out.pdf = 1.0
+                    if not specular:
+                        out.pdf = wp.static(layered_pdf)(L, wo_in, out.wi)
+                    return out
+        return failed_sample()
 
+    @wp.func
+    def layered_eval_pdf(L: Slab, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+        """f and pdf together, as a material's ``eval_pdf`` (two independent estimates)."""
+        ev = BSDFEval()
+        ev.f = wp.static(layered_f)(L, wo, wi)
+        ev.pdf = wp.static(layered_pdf)(L, wo, wi)
+        return ev
 
-@wp.func
-def layered_eval_pdf(L: Slab, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
-    """f and pdf together, as a material's ``eval_pdf`` (two independent estimates)."""
-    ev = BSDFEval()
-    ev.f = layered_f(L, wo, wi)
-    ev.pdf = layered_pdf(L, wo, wi)
-    return ev
+    return layered_eval_pdf, layered_sample

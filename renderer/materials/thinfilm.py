@@ -33,6 +33,7 @@ observer (``spectral:N``, the render option). Lobes:
 """
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -47,8 +48,7 @@ from renderer.materials.coating import (BOTH_SIDES, Coating, coating_eval, coati
                                         mean_reflectance)
 from renderer.materials.energy import mirror_lost, mirror_multiple
 from renderer.materials.coating_table import coating_table
-from renderer.materials.layered import (FILM, LAMBERT, SLAB_PARAMS, Interface, Slab, layered_eval_pdf,
-                                        layered_sample, make_slab, walk_flags)
+from renderer.materials.layered import FILM, LAMBERT, SLAB_PARAMS, Interface, Slab, make_slab, walk, walk_flags
 from renderer.materials.microfacet import (ROUGHNESS_PARAMS, ggx_sample_visible, is_smooth, resolve_roughness,
                                            roughness_to_alpha)
 from renderer.materials.stack import STACK_PARAMS, resolve_stack, stack_rows
@@ -109,6 +109,11 @@ def layer_rows(values: dict[str, Any], loc: Location | None) -> np.ndarray:
 def table_rows(values: dict[str, Any], loc: Location | None, thin_film: str) -> tuple[np.ndarray, str]:
     """The coating's baked RGB (R, T) table in the thin-film mode ``table`` (:mod:`.coating_table`)."""
     return coating_table(values, PARAMS, loc, thin_film, bool(values.get("transmission") or values.get("layered")))
+
+
+def walks(values: dict[str, Any]) -> bool:
+    """Whether this material takes the layered random walk (``"bool layered"``)."""
+    return bool(PARAMS.value(values, "layered"))
 
 
 @wp.func
@@ -196,15 +201,10 @@ def _base_lobe(b: BSDF, r_o: wp.vec3) -> wp.vec3:
 
 
 @wp.func
-def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+def _smooth_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
     """The substrate lobe (the delta lobes have no value or density here): f from the film at wo
     and at wi, the density its selection probability in ``sample`` times cos/π. The film at wo
     is evaluated once for both."""
-    if _layered(b):
-        return layered_eval_pdf(_slab(b), wo, wi)
-    alpha = _alpha(b)
-    if not is_smooth(alpha):
-        return _rough_eval_pdf(b, wo, wi, alpha)
     ev = BSDFEval()
     if _transmissive(b) or max3(b.p[SLOT.reflectance]) <= 0.0 or not same_hemisphere(wo, wi):
         return ev
@@ -220,13 +220,8 @@ def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
 
 
 @wp.func
-def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+def _smooth_sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
     """Pick the mirror, the refraction or the substrate in proportion to their mean RGB albedo."""
-    if _layered(b):
-        return layered_sample(_slab(b), wo, u)
-    alpha = _alpha(b)
-    if not is_smooth(alpha):
-        return _rough_sample(b, wo, u, alpha)
     r, t = film_reflect_transmit(b, wo)
     base = _base_lobe(b, r)
     p_r = mean3(r)
@@ -290,77 +285,131 @@ def _specular_share(b: BSDF, r_o: wp.vec3, base: wp.vec3) -> float:
     return wp.where(total > 0.0, mean3(r_o) / total, 0.0)
 
 
-@wp.func
-def _rough_opaque_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3, alpha: wp.vec2) -> BSDFEval:
-    """A rough coated opaque substrate (two-sided): the glossy coating lobe plus the smooth case's
-    substrate lobe, which keeps the film's R and T at the macroscopic normal (an approximation:
-    the coating's glossy albedo and 1 − R there need not sum to exactly 1)."""
-    ev = BSDFEval()
-    if not same_hemisphere(wo, wi):
-        return ev
-    sgn = wp.where(wo[2] < 0.0, -1.0, 1.0)
-    o = signed_z(wo, sgn)
-    i = signed_z(wi, sgn)
-    r_o, t_o = coating_RT(b, o[2])
-    base = _base_lobe(b, r_o)
-    p_spec = _specular_share(b, r_o, base)
-    wm = wp.normalize(o + i)
-    r_m, t_m = coating_RT(b, wp.dot(o, wm))
-    ev = glossy_reflection(o, i, wm, r_m, alpha)
-    if _multiscatters(b):
-        # Kulla–Conty's lobe with F̄ the coating's mean R: the glossy part then sums to the coating's albedo
-        p_ms = mirror_lost(b.layers, alpha, o[2])
-        ev.f = ev.f + mirror_multiple(b.layers, alpha, o[2], i[2], mean_reflectance(film_coating(b)))
-        ev.pdf = (1.0 - p_ms) * ev.pdf + p_ms * i[2] * INV_PI
-    ev.pdf = ev.pdf * p_spec
-    if max3(b.p[SLOT.reflectance]) > 0.0:
-        r_i, t_i = coating_RT(b, i[2])
-        ev.f = ev.f + wp.cw_mul(base, wp.vec3(1.0) - r_i) * INV_PI
-        ev.pdf = ev.pdf + (1.0 - p_spec) * i[2] * INV_PI
-    return ev
+@lru_cache(maxsize=None)
+def _rough_lobes(multiscatter: bool) -> tuple[wp.Function, wp.Function]:
+    """The rough coating's ``eval_pdf`` and ``sample`` (with ``alpha``), with the compensation lobe
+    compiled in only where ``multiscatter`` says some material of the kernel's scene can use it."""
 
-
-@wp.func
-def _rough_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3, alpha: wp.vec2) -> BSDFEval:
-    if _transmissive(b):
+    @wp.func
+    def opaque_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3, alpha: wp.vec2) -> BSDFEval:
+        """A rough coated opaque substrate (two-sided): the glossy coating lobe plus the smooth case's
+        substrate lobe, which keeps the film's R and T at the macroscopic normal (an approximation:
+        the coating's glossy albedo and 1 − R there need not sum to exactly 1)."""
         ev = BSDFEval()
-        if _multiscatters(b):
-            ev = coating_ms_eval(film_coating(b), _eta(b), alpha, wo, wi, True, b.layers)
-        else:
-            ev = coating_eval(film_coating(b), _eta(b), alpha, wo, wi, BOTH_SIDES, True)
-        ev.f = _tinted(b, ev.f, wo, wi)
+        if not same_hemisphere(wo, wi):
+            return ev
+        sgn = wp.where(wo[2] < 0.0, -1.0, 1.0)
+        o = signed_z(wo, sgn)
+        i = signed_z(wi, sgn)
+        r_o, t_o = coating_RT(b, o[2])
+        base = _base_lobe(b, r_o)
+        p_spec = _specular_share(b, r_o, base)
+        wm = wp.normalize(o + i)
+        r_m, t_m = coating_RT(b, wp.dot(o, wm))
+        ev = glossy_reflection(o, i, wm, r_m, alpha)
+        if wp.static(multiscatter):
+            if _multiscatters(b):
+                # Kulla–Conty's lobe with F̄ the coating's mean R: the glossy part then sums to the coating's albedo
+                p_ms = mirror_lost(b.layers, alpha, o[2])
+                ev.f = ev.f + mirror_multiple(b.layers, alpha, o[2], i[2], mean_reflectance(film_coating(b)))
+                ev.pdf = (1.0 - p_ms) * ev.pdf + p_ms * i[2] * INV_PI
+        ev.pdf = ev.pdf * p_spec
+        if max3(b.p[SLOT.reflectance]) > 0.0:
+            r_i, t_i = coating_RT(b, i[2])
+            ev.f = ev.f + wp.cw_mul(base, wp.vec3(1.0) - r_i) * INV_PI
+            ev.pdf = ev.pdf + (1.0 - p_spec) * i[2] * INV_PI
         return ev
-    return _rough_opaque_eval_pdf(b, wo, wi, alpha)
 
+    @wp.func
+    def rough_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3, alpha: wp.vec2) -> BSDFEval:
+        if _transmissive(b):
+            if wp.static(multiscatter):
+                if _multiscatters(b):
+                    ms = coating_ms_eval(film_coating(b), _eta(b), alpha, wo, wi, True, b.layers)
+                    ms.f = _tinted(b, ms.f, wo, wi)
+                    return ms
+            ev = coating_eval(film_coating(b), _eta(b), alpha, wo, wi, BOTH_SIDES, True)
+            ev.f = _tinted(b, ev.f, wo, wi)
+            return ev
+        return wp.static(opaque_eval_pdf)(b, wo, wi, alpha)
 
-@wp.func
-def _rough_sample(b: BSDF, wo: wp.vec3, u: wp.vec3, alpha: wp.vec2) -> BSDFSample:
-    """A visible microfacet normal, then reflection or refraction by the coating's mean R and T
-    there (clear substrate), or the glossy lobe or the substrate by their shares (opaque)."""
-    if _transmissive(b):
-        s = BSDFSample()
-        if _multiscatters(b):
-            s = coating_ms_sample(film_coating(b), _eta(b), alpha, wo, u, True, b.layers)
-        else:
+    @wp.func
+    def rough_sample(b: BSDF, wo: wp.vec3, u: wp.vec3, alpha: wp.vec2) -> BSDFSample:
+        """A visible microfacet normal, then reflection or refraction by the coating's mean R and T
+        there (clear substrate), or the glossy lobe or the substrate by their shares (opaque)."""
+        if _transmissive(b):
+            if wp.static(multiscatter):
+                if _multiscatters(b):
+                    ms = coating_ms_sample(film_coating(b), _eta(b), alpha, wo, u, True, b.layers)
+                    ms.weight = _tinted(b, ms.weight, wo, ms.wi)
+                    return ms
             s = coating_sample(film_coating(b), _eta(b), alpha, wo, u, BOTH_SIDES, True)
-        s.weight = _tinted(b, s.weight, wo, s.wi)
-        return s
-    sgn = wp.where(wo[2] < 0.0, -1.0, 1.0)
-    o = signed_z(wo, sgn)
-    r_o, t_o = coating_RT(b, o[2])
-    base = _base_lobe(b, r_o)
-    if mean3(r_o) + mean3(base) <= 0.0:
-        return failed_sample()
-    lobe = DIFFUSE
-    i = cosine_hemisphere(wp.vec2(u[0], u[1]))
-    p_spec = _specular_share(b, r_o, base)
-    if u[2] < p_spec:
-        lobe = GLOSSY
-        # the compensation lobe is cosine distributed, like the base: i stays as drawn
-        if not _multiscatters(b) or u[2] >= p_spec * mirror_lost(b.layers, alpha, o[2]):
-            wm = ggx_sample_visible(o, alpha, wp.vec2(u[0], u[1]))
-            i = wm * (2.0 * wp.dot(o, wm)) - o
-            if i[2] <= 0.0:
-                return failed_sample()
-    wi = signed_z(i, sgn)
-    return sampled(wo, wi, _rough_opaque_eval_pdf(b, wo, wi, alpha), lobe)
+            s.weight = _tinted(b, s.weight, wo, s.wi)
+            return s
+        sgn = wp.where(wo[2] < 0.0, -1.0, 1.0)
+        o = signed_z(wo, sgn)
+        r_o, t_o = coating_RT(b, o[2])
+        base = _base_lobe(b, r_o)
+        if mean3(r_o) + mean3(base) <= 0.0:
+            return failed_sample()
+        lobe = DIFFUSE
+        i = cosine_hemisphere(wp.vec2(u[0], u[1]))
+        p_spec = _specular_share(b, r_o, base)
+        if u[2] < p_spec:
+            lobe = GLOSSY
+            # the compensation lobe is cosine distributed, like the base: i stays as drawn
+            glossy = True
+            if wp.static(multiscatter):
+                glossy = not _multiscatters(b) or u[2] >= p_spec * mirror_lost(b.layers, alpha, o[2])
+            if glossy:
+                wm = ggx_sample_visible(o, alpha, wp.vec2(u[0], u[1]))
+                i = wm * (2.0 * wp.dot(o, wm)) - o
+                if i[2] <= 0.0:
+                    return failed_sample()
+        wi = signed_z(i, sgn)
+        return sampled(wo, wi, wp.static(opaque_eval_pdf)(b, wo, wi, alpha), lobe)
+
+    return rough_eval_pdf, rough_sample
+
+
+@lru_cache(maxsize=None)
+def _lobes(rough: bool, multiscatter: bool, layered: bool) -> tuple[wp.Function, wp.Function]:
+    """``eval_pdf`` and ``sample`` compiling only what a kernel's thin films can reach: the GGX lobes
+    (``rough``), their compensation (``multiscatter``), the layered walk (``layered``)."""
+    rough_eval_pdf, rough_sample = _rough_lobes(multiscatter)
+    walk_eval_pdf, walk_sample = walk(FILM, LAMBERT, not rough)   # the coating over its Lambertian base
+
+    @wp.func
+    def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+        """The layered walk's estimate, the rough lobes, or the smooth coating's substrate lobe."""
+        if wp.static(layered):
+            if _layered(b):
+                return wp.static(walk_eval_pdf)(_slab(b), wo, wi)
+        if wp.static(rough):
+            alpha = _alpha(b)
+            if not is_smooth(alpha):
+                return wp.static(rough_eval_pdf)(b, wo, wi, alpha)
+        return _smooth_eval_pdf(b, wo, wi)
+
+    @wp.func
+    def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+        """The layered walk, the rough lobes, or the smooth coating's mirror, refraction or substrate."""
+        if wp.static(layered):
+            if _layered(b):
+                return wp.static(walk_sample)(_slab(b), wo, u)
+        if wp.static(rough):
+            alpha = _alpha(b)
+            if not is_smooth(alpha):
+                return wp.static(rough_sample)(b, wo, u, alpha)
+        return _smooth_sample(b, wo, u)
+
+    return eval_pdf, sample
+
+
+#: Every lobe: what the tests and other code call directly.
+eval_pdf, sample = _lobes(True, True, True)
+
+
+def specialised(features: Any) -> tuple[wp.Function, wp.Function]:
+    """``eval_pdf`` and ``sample`` with only the lobes a kernel of ``features`` can reach."""
+    return _lobes(NAME not in features.smooth, features.multiscatter, features.layered)
