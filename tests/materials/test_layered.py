@@ -83,8 +83,9 @@ def test_killeroo_coats_f_integrates_to_what_the_walk_reflects(values):
     equals the walk's albedo within 4 sigma + 0.5 %. pbrt-v4's LayeredBxDF::f weights a walk
     vertex's exit against ``exitInterface.PDF(-w, wi)``, a density over the outside direction,
     where the exit strategy's density of the inside direction belongs (``exit_pdf`` in
-    ``layered.walk``); with that weight this f integrates 3.7-5.0 % (red) and 8.2-8.6 % (green) above the walk, and pbrt's
-    image of the killeroos under their small light is some 6 % brighter than ours (docs/pbrt-v4.md)."""
+    ``layered.walk``); with that weight this f integrates 3.7-5.0 % (red) and 8.2-8.6 % (green)
+    above the walk, and pbrt's image of the killeroos under their small light is some 6 % brighter
+    than ours (docs/pbrt-v4.md)."""
     m = bsdf_moments("coateddiffuse", values | DEEP, (0.3, 0.2, 0.9), n=400_000)
     f_int, walk = m["albedo_uniform"], m["albedo_sampled_nonspecular"]
     tol = 4 * np.hypot(m["albedo_uniform_stderr"], m["albedo_sampled_stderr"]) + 0.005 * walk
