@@ -15,8 +15,8 @@ import warp as wp
 from renderer.errors import Location, SceneError
 from renderer.materials.bsdf import BSDF, BSDFEval, BSDFSample
 from renderer.materials.conductor import COPPER_ETA, COPPER_K, artist_k, spectral_fresnel_rows
-from renderer.materials.layered import (CONDUCTOR, DIELECTRIC, FIRST_FREE_FLAG, SLAB_PARAMS, Interface, Slab,
-                                        make_slab, walk, walk_flags)
+from renderer.materials.layer_interfaces import CONDUCTOR, DIELECTRIC, Interface
+from renderer.materials.layered import FIRST_FREE_FLAG, SLAB_PARAMS, Slab, make_slab, walk, walk_flags
 from renderer.materials.microfacet import REMAP_ROUGHNESS, resolve_roughness, roughness_params, roughness_to_alpha
 from renderer.parameters import Parameter, Parameters
 

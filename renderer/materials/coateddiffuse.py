@@ -8,8 +8,8 @@ import warp as wp
 
 from renderer.errors import Location
 from renderer.materials.bsdf import BSDF, BSDFEval, BSDFSample
-from renderer.materials.layered import (DIELECTRIC, LAMBERT, SLAB_PARAMS, Interface, Slab,
-                                        make_slab, walk, walk_flags)
+from renderer.materials.layer_interfaces import DIELECTRIC, LAMBERT, Interface
+from renderer.materials.layered import SLAB_PARAMS, Slab, make_slab, walk, walk_flags
 from renderer.materials.microfacet import REMAP_ROUGHNESS, resolve_roughness, roughness_params, roughness_to_alpha
 from renderer.parameters import Parameter, Parameters
 

@@ -18,9 +18,9 @@ Estimates are stochastic but deterministic: each call seeds its own RNG from a h
 directions and of the BSDF's per-sample ``wavelength_u``, so the same seed renders the same image
 and two samples of one pixel use independent walks.
 
-Interfaces are of a small integer kind (Warp has no function pointers). Each material walks
-between a top and a bottom of fixed kinds, so :func:`walk` builds its functions from the two kinds'
-entries of ``INTERFACES`` and nothing branches on a kind at run time: a kernel compiles the lobes
+Interfaces are of a small integer kind (:mod:`.layer_interfaces`: Warp has no function pointers).
+Each material walks between a top and a bottom of fixed kinds, so :func:`walk` builds its functions
+from the two kinds' entries of ``INTERFACES`` and nothing branches on a kind at run time: a kernel compiles the lobes
 of the kinds its materials walk between, not of every kind. FILM is a thin film
 or multilayer stack (``thinfilm``'s coating, :mod:`.coating`) whose Fresnel term is an RGB R and T
 per direction: smooth, it reflects with probability mean(R) / (mean R + mean T); rough, it is the
@@ -35,22 +35,12 @@ import warp as wp
 
 from renderer.materials.bsdf import (DIFFUSE, FIRST_DERIVED_FLAG, GLOSSY, REFLECTION, SPECULAR, TRANSMISSION,
                                      BSDFEval, BSDFSample, failed_sample)
-from renderer.materials.coating import Coating, coating_eval, coating_sample, smooth_coating_sample
-from renderer.materials.conductor import conductor_eval, conductor_sample
-from renderer.materials.dielectric import dielectric_eval, dielectric_sample
-from renderer.materials.diffuse import lambert_eval, lambert_sample
-from renderer.materials.microfacet import is_smooth
+from renderer.materials.layer_interfaces import INTERFACES, LAMBERT, Interface
 from renderer.materials.phase import hg_phase, hg_sample
 from renderer.parameters import Parameter
 from renderer.sampling.mis import power_heuristic
 from renderer.sampling.rng import hash_u32
 from renderer.vecmath import PI, max3
-
-#: Interface kinds.
-DIELECTRIC = wp.constant(0)   # eta (eta[0]) over alpha: pbrt's DielectricBxDF
-LAMBERT = wp.constant(1)      # albedo: pbrt's DiffuseBxDF
-CONDUCTOR = wp.constant(2)    # eta + i k over alpha: pbrt's ConductorBxDF
-FILM = wp.constant(3)         # coat on a substrate of relative index eta[0], over alpha
 
 BOTH = wp.constant(REFLECTION | TRANSMISSION)
 #: Smallest slab thickness (pbrt: the smallest normal float), so a thickness of 0 stays defined.
@@ -81,17 +71,6 @@ def walk_flags(values: dict[str, Any]) -> int:
 
 
 @wp.struct
-class Interface:
-    kind: int
-    eta: wp.vec3        # DIELECTRIC: eta[0], inside over outside; CONDUCTOR: eta relative to the slab
-    k: wp.vec3          # CONDUCTOR
-    alpha: wp.vec2      # DIELECTRIC, CONDUCTOR, FILM: GGX roughness
-    albedo: wp.vec3     # LAMBERT
-    coat: Coating       # FILM (its substrate must be clear); CONDUCTOR: its spectral Fresnel table at
-                        # coat.layers[coat.table_first] (0: the per-channel formula)
-
-
-@wp.struct
 class Slab:
     top: Interface
     bottom: Interface
@@ -117,102 +96,6 @@ def make_slab(top: Interface, bottom: Interface, thickness: float, albedo: wp.ve
     L.n_samples = (flags >> wp.static(_SAMPLES_SHIFT)) & 63
     L.seed = seed
     return L
-
-
-# Interfaces, one kind at a time: each material's walk has a fixed top and bottom kind
-# (:func:`walk`), so a kernel compiles only the lobes of the kinds it walks between.
-
-
-@wp.func
-def _dielectric_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
-    return dielectric_eval(s.eta[0], s.alpha, wo, wi, sides, radiance)
-
-
-@wp.func
-def _dielectric_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
-    return dielectric_sample(s.eta[0], s.alpha, wo, u, sides, radiance)
-
-
-@wp.func
-def _dielectric_specular(s: Interface) -> bool:
-    return s.eta[0] == 1.0 or is_smooth(s.alpha)
-
-
-@wp.func
-def _film_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
-    return coating_eval(s.coat, s.eta[0], s.alpha, wo, wi, sides, radiance)
-
-
-@wp.func
-def _film_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
-    return coating_sample(s.coat, s.eta[0], s.alpha, wo, u, sides, radiance)
-
-
-@wp.func
-def _rough_specular(s: Interface) -> bool:
-    return is_smooth(s.alpha)
-
-
-@wp.func
-def _smooth_film_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
-    """A smooth coating's lobes are deltas: no value (``coating_eval`` at alpha 0)."""
-    return BSDFEval()
-
-
-@wp.func
-def _smooth_film_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
-    return smooth_coating_sample(s.coat, s.eta[0], wo, u[2], sides, radiance)
-
-
-@wp.func
-def _specular(s: Interface) -> bool:
-    return True
-
-
-@wp.func
-def _lambert_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
-    if (sides & REFLECTION) == 0:
-        return BSDFEval()
-    return lambert_eval(s.albedo, wo, wi)
-
-
-@wp.func
-def _lambert_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
-    if (sides & REFLECTION) == 0:
-        return failed_sample()
-    return lambert_sample(s.albedo, wo, u)
-
-
-@wp.func
-def _diffuse(s: Interface) -> bool:
-    return False
-
-
-@wp.func
-def _conductor_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
-    if (sides & REFLECTION) == 0:
-        return BSDFEval()
-    return conductor_eval(s.eta, s.k, s.alpha, wo, wi, s.coat.layers, s.coat.table_first)
-
-
-@wp.func
-def _conductor_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
-    if (sides & REFLECTION) == 0:
-        return failed_sample()
-    return conductor_sample(s.eta, s.k, s.alpha, wo, u, s.coat.layers, s.coat.table_first)
-
-
-#: Per (kind, smooth) the interface's f and density restricted to ``sides`` (pbrt's
-#: BxDFReflTransFlags), its sampling, and whether it is a delta interface (which next-event
-#: estimation cannot reach, so the walk skips that). ``smooth``: every such interface of the
-#: kernel's materials has alpha 0 (a FILM of a smooth thinfilm).
-INTERFACES = {
-    (DIELECTRIC, False): (_dielectric_eval, _dielectric_sample, _dielectric_specular),
-    (FILM, False): (_film_eval, _film_sample, _rough_specular),
-    (FILM, True): (_smooth_film_eval, _smooth_film_sample, _specular),
-    (LAMBERT, False): (_lambert_eval, _lambert_sample, _diffuse),
-    (CONDUCTOR, False): (_conductor_eval, _conductor_sample, _rough_specular),
-}
 
 
 @wp.func

@@ -48,7 +48,8 @@ from renderer.materials.coating import (BOTH_SIDES, Coating, coating_eval, coati
                                         mean_reflectance)
 from renderer.materials.energy import mirror_lost, mirror_multiple
 from renderer.materials.coating_table import coating_table
-from renderer.materials.layered import FILM, LAMBERT, SLAB_PARAMS, Interface, Slab, make_slab, walk, walk_flags
+from renderer.materials.layer_interfaces import FILM, LAMBERT, Interface
+from renderer.materials.layered import SLAB_PARAMS, Slab, make_slab, walk, walk_flags
 from renderer.materials.microfacet import (ROUGHNESS_PARAMS, ggx_sample_visible, is_smooth, resolve_roughness,
                                            roughness_to_alpha)
 from renderer.materials.stack import STACK_PARAMS, resolve_stack, stack_rows
