@@ -16,6 +16,11 @@ def max3(v: wp.vec3) -> float:
 
 
 @wp.func
+def mean3(v: wp.vec3) -> float:
+    return (v[0] + v[1] + v[2]) / 3.0
+
+
+@wp.func
 def luminance(c: wp.vec3) -> float:
     return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 

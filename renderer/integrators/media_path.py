@@ -28,10 +28,10 @@ from renderer.lights import dispatch
 from renderer.lights.sample import light_sampler
 from renderer.materials.phase import hg_phase, hg_sample
 from renderer.materials.selection import INTERFACE_KIND
-from renderer.media.tracking import Transmitted, mean3, ratio_track
+from renderer.media.tracking import Transmitted, ratio_track
 from renderer.sampling.mis import power_heuristic
 from renderer.sampling.rng import sample_rng
-from renderer.vecmath import max3
+from renderer.vecmath import max3, mean3
 
 #: interface surfaces one shadow ray crosses before it counts as blocked
 MAX_CROSSINGS = 64

@@ -25,8 +25,8 @@ from renderer.geometry.offsets import offset_origin
 from renderer.integrators.media_path import crossed, is_interface, media_functions, start_medium
 from renderer.integrators.vertex import path_functions, scatter_function
 from renderer.integrators.visibility import ray_queries
-from renderer.media.tracking import ABSORBED, SCATTERED, delta_track, mean3
-from renderer.vecmath import max3
+from renderer.media.tracking import ABSORBED, SCATTERED, delta_track
+from renderer.vecmath import max3, mean3
 from renderer.sampling.samplers import SamplerParams
 
 

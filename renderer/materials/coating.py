@@ -37,7 +37,7 @@ from renderer.optics.angular_table import table_locate, table_value
 from renderer.optics.fresnel import fresnel_dielectric
 from renderer.optics.multilayer import multilayer_rgb3, multilayer_rgb_sampled
 from renderer.optics.thin_film import thin_film_rgb3, thin_film_rgb_sampled
-from renderer.vecmath import INV_PI
+from renderer.vecmath import INV_PI, mean3
 
 BOTH_SIDES = wp.constant(REFLECTION | TRANSMISSION)
 #: How fast the compensation's facet shift moves from δ(μ) to δ̄ with alpha (see _facet_shift).
@@ -112,11 +112,6 @@ def coating_rgb(c: Coating, cos_w: float):
     if not c.clear:
         t = wp.vec3(0.0)
     return r, t
-
-
-@wp.func
-def mean3(v: wp.vec3) -> float:
-    return (v[0] + v[1] + v[2]) / 3.0
 
 
 @wp.func

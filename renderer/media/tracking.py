@@ -22,6 +22,7 @@ import warp as wp
 from renderer.media.device import (CLOUD, HOMOGENEOUS, LOG_T_MIN, LOG_T_STEP, NANOVDB, RGBGRID, TABLE_LAST,
                                    UNIFORMGRID, Media)
 from renderer.textures.noise import noise
+from renderer.vecmath import mean3
 
 #: what delta tracking ends with
 PASSED, SCATTERED, ABSORBED = wp.constant(0), wp.constant(1), wp.constant(2)
@@ -247,11 +248,6 @@ def next_cell(media: Media, w: Majorants) -> Majorants:
         if c[a] < 0 or c[a] >= r.res[a]:
             r.t_end = r.t
     return r
-
-
-@wp.func
-def mean3(v: wp.vec3) -> float:
-    return (v[0] + v[1] + v[2]) / 3.0
 
 
 @wp.func

@@ -12,7 +12,8 @@ import renderer.scene  # noqa: F401  (first: renderer.textures and renderer.scen
 from renderer.media.description import MediumDesc
 from renderer.media.device import Media, upload_media
 from renderer.media.majorants import grid_max
-from renderer.media.tracking import ABSORBED, PASSED, SCATTERED, delta_track, mean3, properties, ratio_track
+from renderer.media.tracking import ABSORBED, PASSED, SCATTERED, delta_track, properties, ratio_track
+from renderer.vecmath import mean3
 
 N = 200_000
 DEVICE = "cpu"
