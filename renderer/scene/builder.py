@@ -16,8 +16,6 @@ import numpy as np
 
 from renderer import lights, materials
 from renderer.errors import Location, RenderError, SceneError, SceneErrors, UnsupportedError
-from renderer.media.description import MediumInterfaceDesc
-from renderer.scene.media_params import read_medium
 from renderer.scene.description import (CameraDesc, InstanceSetDesc, IntegratorDesc, MeshDesc, SamplerDesc,
                                         SceneDescription, ShapeDesc, TextureDesc)
 from renderer.scene.params import ParamSet
@@ -36,6 +34,7 @@ from renderer.settings import sampler_spec
 from renderer.scene.upgrade import upgraded
 from renderer.scene.transform import (check_single_precision, inverse, read_instance_transforms, swaps_handedness,
                                       transformed_mesh)
+from renderer.scene.media_directives import MediaDirectives
 from renderer.scene.transform_directives import TransformDirectives
 
 #: Shapes we build, each from its parameters and the Shape directive's location.
@@ -44,7 +43,7 @@ SHAPES: dict[str, Callable[[ParamSet, Location], MeshDesc]] = {
     "bilinearmesh": bilinear_mesh, "loopsubdiv": loop_subdivision_surface}
 
 
-class Builder(TransformDirectives):
+class Builder(TransformDirectives, MediaDirectives):
     """Consumes directives one by one; one method per directive, named as the directive, except
     the ones UNSUPPORTED ignores outright."""
 
@@ -62,9 +61,7 @@ class Builder(TransformDirectives):
         self.default_material: int | None = None
         self.world_begun = False
         self.path_integrator: Location | None = None    # where pbrt-v4's "path" (not volpath) was named
-        self.media: dict[str, int] = {}          # MakeNamedMedium names -> SceneDescription.media
-        #: (shape index or -1 for the camera, inside, outside, where named): resolved at the end, as pbrt does
-        self.medium_refs: list[tuple[int, str, str, Location | None]] = []
+        self._init_media()
 
     # -- driver
 
@@ -164,8 +161,7 @@ class Builder(TransformDirectives):
         world_from_camera = inverse(self.state.ctm, "Camera", d.loc)
         self.named_coordinate_systems["camera"] = world_from_camera
         self.scene.camera = read_camera(name, d.params, world_from_camera, d.loc)
-        if self.state.medium_outside:       # pbrt-v4: the camera sits in the current outside medium
-            self.medium_refs.append((-1, self.state.medium_outside, self.state.medium_outside, d.loc))
+        self._camera_medium(d.loc)
         self.warn_unused(d)
 
     def Film(self, d: Directive) -> None:
@@ -209,40 +205,6 @@ class Builder(TransformDirectives):
 
     def Accelerator(self, d: Directive) -> None:
         self.unsupported(d.name, self.check_known(d), d.loc)
-
-    def MediumInterface(self, d: Directive) -> None:
-        """One name: the same medium on both sides; two: inside, then outside (pbrt-v4's order)."""
-        inside = str(d.args[0])
-        outside = str(d.args[1]) if len(d.args) > 1 else inside
-        self.state.medium_inside, self.state.medium_outside, self.state.medium_loc = inside, outside, d.loc
-
-    def MakeNamedMedium(self, d: Directive) -> None:
-        name = str(d.args[0])
-        if name in self.media:
-            raise SceneError(f'medium "{name}" is defined twice (first at {self.scene.media[self.media[name]].loc})',
-                             d.loc)
-        kind = d.params.string("type")
-        if kind is None:
-            raise SceneError(f'MakeNamedMedium "{name}": "string type" is required', d.loc)
-        inverse(self.state.ctm, d.name, d.loc)
-        self.scene.media.append(read_medium(kind, name, d.params, self.state.ctm, d.loc, self.warn))
-        self.media[name] = len(self.scene.media) - 1
-        self.warn_unused(d)
-
-    def _resolve_media(self) -> None:
-        """Medium names to indices (pbrt-v4 too allows a name defined after its use)."""
-        def index(name: str, loc: Location | None) -> int:
-            if not name:
-                return -1
-            if name not in self.media:
-                raise SceneError(f'no medium named "{name}" (define it with MakeNamedMedium)', loc)
-            return self.media[name]
-
-        for shape, inside, outside, loc in self.medium_refs:
-            if shape < 0:
-                self.scene.camera_medium = index(outside, loc)
-            else:
-                self.scene.shapes[shape].media = MediumInterfaceDesc(index(inside, loc), index(outside, loc))
 
     def WorldBegin(self, d: Directive) -> None:
         if self.world_begun:
@@ -385,9 +347,7 @@ class Builder(TransformDirectives):
             area_light=self.state.area_light,
             reverse_orientation=self.state.reverse_orientation ^ swaps_handedness(ctm), loc=d.loc, alpha=alpha))
         index = len(self.scene.shapes) - 1
-        if self.state.medium_inside or self.state.medium_outside:
-            self.medium_refs.append((index, self.state.medium_inside, self.state.medium_outside,
-                                     self.state.medium_loc))
+        self._shape_media(index)
         if obj is not None:
             obj.shapes.append(index)
         else:
@@ -439,13 +399,11 @@ class Builder(TransformDirectives):
     def _mirrored_shapes(self, obj: ObjectDefinition) -> list[int]:
         if obj.mirrored is None:
             obj.mirrored = []
-            refs = {ref[0]: ref for ref in self.medium_refs}
             for i in obj.shapes:
                 s = self.scene.shapes[i]
                 self.scene.shapes.append(replace(s, reverse_orientation=not s.reverse_orientation))
                 obj.mirrored.append(len(self.scene.shapes) - 1)
-                if i in refs:       # its MediumInterface, resolved with the rest at the end
-                    self.medium_refs.append((len(self.scene.shapes) - 1, *refs[i][1:]))
+            self._copy_media(dict(zip(obj.shapes, obj.mirrored)))
         return obj.mirrored
 
     def _instance_placements(self, d: Directive) -> np.ndarray:
