@@ -9,26 +9,10 @@ import numpy as np
 import pytest
 
 from renderer.color.rgb import luminance
-from renderer.errors import Location, MissingFileError, SceneError, UnsupportedError
+from renderer.errors import MissingFileError, SceneError, UnsupportedError
 from renderer.lights import REGISTRY, area, build_light_table, distant, light, parameter_tables
-from renderer.scene import load_description
 from renderer.scene.description import CameraDesc, SceneDescription
-
-HEAD = 'Camera "perspective"\nWorldBegin\n'          # scene text after it starts at line 3
-
-
-def load(tmp_path: Path, text: str):
-    path = tmp_path / "scene.pbrt"
-    path.write_text(text)
-    return load_description(path)
-
-
-def error_at(tmp_path: Path, text: str, line: int, match: str, kind: type[SceneError] = SceneError) -> None:
-    """Loading fails with ``kind`` at scene.pbrt:``line``, before anything is uploaded."""
-    with pytest.raises(kind, match=match) as info:
-        load(tmp_path, text)
-    assert info.value.loc == Location(str(tmp_path / "scene.pbrt"), line), str(info.value)
-    assert str(info.value).startswith(f"{tmp_path / 'scene.pbrt'}:{line}: ")
+from scene_files import HEAD, error_at, load
 
 
 def test_distant_light_direction_points_to_the_light_through_the_ctm(tmp_path):

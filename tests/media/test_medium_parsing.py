@@ -1,32 +1,14 @@
 """MakeNamedMedium, MediumInterface and the camera's medium, read as pbrt-v4 reads them (no Warp)."""
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-from renderer.errors import Location, SceneError, UnsupportedError
+from renderer.errors import Location, SceneError
 from renderer.materials.subsurface import NAMED_MEDIA as MEASURED    # pbrt-v4's measured media, shared
 from renderer.scene.media_params import RGBGRID_LE_SCALE, read_medium
-from renderer.scene import load_description
 from renderer.scene.params import Param, ParamSet
-
-HEAD = 'Camera "perspective"\nWorldBegin\n'
-
-
-def load(tmp_path: Path, text: str):
-    path = tmp_path / "scene.pbrt"
-    path.write_text(text)
-    return load_description(path)
-
-
-def error_at(tmp_path: Path, text: str, line: int, match: str, kind: type = SceneError) -> None:
-    path = tmp_path / "scene.pbrt"
-    path.write_text(text)
-    with pytest.raises(kind, match=match) as info:
-        load_description(path)
-    assert info.value.loc == Location(str(path), line), str(info.value)
+from scene_files import HEAD, error_at, load
 
 
 def test_homogeneous_defaults_are_pbrts(tmp_path):
@@ -146,7 +128,7 @@ def test_medium_may_be_named_before_it_is_defined(tmp_path):
     (HEAD + 'MediumInterface "nope"\nShape "sphere"', 3, 'no medium named "nope"', SceneError),
 ])
 def test_errors_name_file_and_line(tmp_path, text, line, match, kind):
-    error_at(tmp_path, text, line, match, kind)
+    error_at(tmp_path, text, line, match, kind=kind)
 
 
 def test_grid_over_the_memory_budget_is_refused_before_allocation():
