@@ -104,7 +104,11 @@ def main() -> None:
     ap.add_argument("--depth", type=int, default=256, help="path depth (the medium's scattering events count)")
     ap.add_argument("--out", type=Path, default=None, help="folder for the PNG strips and results.json")
     ap.add_argument("--only", default="", help="e.g. sphere/sky: one configuration")
+    ap.add_argument("--table", type=Path, default=None, help="print the tables of a results.json and stop")
     args = ap.parse_args()
+    if args.table:
+        print(tables(json.loads(args.table.read_text())))
+        return
     from renderer.io.images import write_png
     results = {}
     for shape in ("sphere", "slab"):
@@ -128,13 +132,29 @@ def main() -> None:
                 write_png(args.out / f"film_body_{shape}_{light}.png", np.concatenate(strip, axis=1))
     if args.out:
         (args.out / "film_body_results.json").write_text(json.dumps(results, indent=1))
-    print("\n| configuration | volume (R, G, B) | diffusion − volume, relative | hue volume / diffusion | ΔE00 |")
-    print("|---|---|---|---|---|")
+    print(tables(results))
+
+
+def tables(results: dict) -> str:
+    """The comparison (diffusion against volume, per configuration) and the film's own effect: its
+    image over the bare one's, per channel, in each model, and the quotient of the two (1: the
+    diffusion model changes the colour exactly as the volumetric reference does)."""
+    out = ["| configuration | volume (R, G, B) | diffusion − volume, relative | hue volume / diffusion | ΔE00 |",
+           "|---|---|---|---|---|"]
     for key, r in results.items():
         rel = ", ".join(f"{100 * x:+.1f} %" for x in r["rel_diff"])
-        print(f"| {key} | {', '.join(f'{x:.3f}' for x in r['volume'])} | {rel} | {r['hue_volume']}° / "
-              f"{r['hue_diffusion']}° | {r['dE00']} |")
-
+        out.append(f"| {key} | {', '.join(f'{x:.3f}' for x in r['volume'])} | {rel} | {r['hue_volume']}° / "
+                   f"{r['hue_diffusion']}° | {r['dE00']} |")
+    out += ["", "| shape / light | film / bare, volume | film / bare, diffusion | coupling error (quotient − 1) |",
+            "|---|---|---|---|"]
+    for key in results:
+        if key.endswith("/film") and key[:-4] + "bare" in results:
+            film, bare = results[key], results[key[:-4] + "bare"]
+            vol = np.array(film["volume"]) / np.array(bare["volume"])
+            dif = np.array(film["diffusion"]) / np.array(bare["diffusion"])
+            out.append(f"| {key[:-5]} | {', '.join(f'{x:.3f}' for x in vol)} | {', '.join(f'{x:.3f}' for x in dif)} | "
+                       f"{', '.join(f'{100 * x:+.1f} %' for x in dif / vol - 1)} |")
+    return "\n".join(out)
 
 if __name__ == "__main__":
     main()

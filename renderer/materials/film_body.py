@@ -57,10 +57,10 @@ def has_film(values: dict[str, Any]) -> bool:
 def resolve_film(values: dict[str, Any], owner: str, loc: Location | None) -> dict[str, Any]:
     """The stack checked and its total thickness derived, as ``thinfilm`` does; a single film's
     thickness defaults to 0 where only a map is given."""
-    if not has_film(values):
+    values = resolve_stack(values, loc, owner)      # refuses a stack's parameters without its layers
+    if not has_film(values) or "thickness" in values:
         return values
-    values = resolve_stack(values, loc, owner)
-    return values if "thickness" in values else values | {"thickness": 0.0}
+    return values | {"thickness": 0.0}
 
 
 @wp.func

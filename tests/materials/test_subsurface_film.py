@@ -178,3 +178,23 @@ def test_white_coated_body_in_a_white_furnace():
     se = img.std(0) / np.sqrt(len(img))
     assert np.all(img.mean(0) < 1.0 + 4 * se), (img.mean(0), se)
     assert np.all(img.mean(0) > 0.5)
+
+
+@pytest.mark.parametrize("params, message", [
+    ('"float layer_thickness" [400 25]', 'material "subsurface": layer_thickness describe a stack, which needs "layer_eta"'),
+    ('"float layer_eta" [1.68 1.43]', 'material "subsurface": a stack ("layer_eta") needs "layer_thickness"'),
+    ('"float layer_eta" [1.68 1.43] "float layer_thickness" [400 25] "float thickness" [300]',
+     'thickness belong to one film'),
+])
+def test_bad_films_are_refused_with_their_line(tmp_path, params, message):
+    (tmp_path / "bad.pbrt").write_text(FLAT.format(params=params))
+    with pytest.raises(renderer.errors.SceneError) as e:
+        renderer.load_scene(tmp_path / "bad.pbrt")
+    assert message in str(e.value) and "bad.pbrt:8" in str(e.value)
+
+
+def test_uncoated_scenes_compile_no_film():
+    """The film's lobes and entry are compiled only into kernels of scenes that have one."""
+    from renderer.materials import lobe_features
+    assert not lobe_features([material("subsurface", reflectance=(0.5, 0.5, 0.5))])["coated_body"]
+    assert lobe_features([material("subsurface", thickness=0.0)])["coated_body"]
