@@ -22,8 +22,9 @@ from renderer.materials import dielectric
 from renderer.materials import subsurface as pbrt_subsurface
 from renderer.materials.beam_diffusion import N_ROWS
 from renderer.materials.bsdf import BSDF
-from renderer.materials.film_body import entry_share, entry_weight
-from renderer.materials.tabulated_bssrdf import albedo_from_reflectance, probe_radius, profile, sample_radius
+from renderer.materials.film_body import entry_share, entry_weight, exit_balance
+from renderer.materials.tabulated_bssrdf import (albedo_from_reflectance, effective_albedo, probe_radius, profile,
+                                                 sample_radius)
 from renderer.optics.dispersion import sample_wavelength, wavelength_weight
 from renderer.optics.fresnel import fresnel_dielectric
 from renderer.sampling.frames import frame_from_tangent, to_local
@@ -173,9 +174,28 @@ def _coated_entry_share(b: BSDF, cos_o: float) -> float:
 
 
 @wp.func
+def _rgb_effective_albedo(b: BSDF) -> wp.vec3:
+    """rho_eff per RGB channel: the reflectance, or the table's at sigma_s / (sigma_a + sigma_s)."""
+    if (b.flags & pbrt_subsurface.FROM_REFLECTANCE) != 0:
+        return b.p[SSS_SLOT.reflectance]
+    out = wp.vec3(0.0)
+    for c in range(3):
+        sa = wp.max(b.p[SSS_SLOT.sigma_a][c], 0.0)
+        ss = wp.max(b.p[SSS_SLOT.sigma_s][c], 0.0)
+        if sa + ss > 0.0:
+            out[c] = effective_albedo(b.layers, b.table_first, ss / (sa + ss))
+    return out
+
+
+@wp.func
 def _coated_entry_weight(b: BSDF, wo_local: wp.vec3, u: wp.vec3) -> wp.vec3:
-    return entry_weight(pbrt_subsurface.coating(b), b.p[SSS_SLOT.eta][0], pbrt_subsurface.surface_alpha(b),
-                        wo_local, u)
+    """The film's transmission sample times the exit balance k (renderer.materials.film_body)."""
+    c = pbrt_subsurface.coating(b)
+    eta = b.p[SSS_SLOT.eta][0]
+    w = entry_weight(c, eta, pbrt_subsurface.surface_alpha(b), wo_local, u)
+    if w == wp.vec3(0.0):
+        return w
+    return wp.cw_mul(w, exit_balance(c, eta, _rgb_effective_albedo(b)))
 
 
 @lru_cache(maxsize=None)

@@ -6,11 +6,16 @@ diffusion BSSRDF crosses its boundary:
 * where light arrives: the reflection lobe carries R, the light that enters carries T (the
   integrator's subsurface step chooses between them in proportion to their mean RGB);
 * where light leaves: the exit lobe Sw(wi) = eta² T(cos θi) k / (c π), c the bare lobe's
-  normalisation and k = T̄_bare / T̄_coat per channel, the hemispherical means 2∫T μ dμ over the
-  same quadrature: ∫Sw cos dω stays eta² (the energy the profile hands over leaves, as for the
-  bare boundary), and the coating only reshapes it over angle and colour. The factor k does not
-  depend on wi, so the step charges it once with the entry weight (``exit_balance``) and the
-  lobe's value and density stay a product of T and the cosine.
+  normalisation. Without k the lobe would let out T̄_coat / T̄_bare of what the bare one lets out
+  (T̄ = 2∫T μ dμ); but what a film keeps inside is not lost, the body sends it back to the
+  boundary. Counting those returns with the body's return albedo a (the chance that light sent
+  back into it reaches the boundary again), a body of effective albedo rho_eff lets out
+  E = a T̄_in / (1 − a R̄_in) of what enters, T̄_in = T̄/eta² (reciprocity), R̄_in = 1 − T̄_in
+  (a lossless film), and a follows from the bare boundary's E = rho_eff. So
+  k = E_coat T̄_bare / (E_bare T̄_coat) = (1 − a R̄_in,bare) / (1 − a R̄_in,coat): a white body
+  (a = 1) lets out everything the film traps, k = T̄_bare / T̄_coat; a black one (a = 0) nothing,
+  k = 1. k does not depend on wi, so the step charges it with the entry weight (``exit_balance``)
+  and the lobe's value and density stay a product of T and the cosine.
 
 Where a film is 0 nm thick its R and T are the bare Fresnel's to float rounding, so these lobes
 are the bare material's. What the film does to the diffusion's own boundary condition (its
@@ -87,8 +92,10 @@ def body_coating(b: BSDF, n_film: float, eta: float, d: float, total: float) -> 
 
 
 @wp.func
-def exit_balance(c: Coating, eta: float) -> wp.vec3:
-    """k = T̄_bare / T̄_coat per channel (see the module docstring), from outside, midpoint rule in μ²."""
+def exit_balance(c: Coating, eta: float, rho_eff: wp.vec3) -> wp.vec3:
+    """k per channel (see the module docstring): (1 − a R̄_bare) / (1 − a R̄_coat), R̄ = 1 − T̄/eta² the
+    hemispherical internal reflectance (T̄ = 2∫T μ dμ from outside, midpoint rule in μ²; reciprocity
+    makes T̄/eta² the inside's), a = rho_eff / (T̄_bare/eta² + rho_eff R̄_bare) the body's return albedo."""
     bare = float(0.0)
     coat = wp.vec3(0.0)
     for j in range(BALANCE_NODES):
@@ -96,8 +103,14 @@ def exit_balance(c: Coating, eta: float) -> wp.vec3:
         r, t = coating_rgb(c, mu)
         coat += t
         bare += 1.0 - fresnel_dielectric(mu, eta)
-    return wp.vec3(wp.where(coat[0] > 0.0, bare / coat[0], 0.0), wp.where(coat[1] > 0.0, bare / coat[1], 0.0),
-                   wp.where(coat[2] > 0.0, bare / coat[2], 0.0))
+    inv = 1.0 / (float(BALANCE_NODES) * eta * eta)
+    t_bare = bare * inv
+    k = wp.vec3(0.0)
+    for ch in range(3):
+        rho = wp.clamp(rho_eff[ch], 0.0, 1.0)
+        a = rho / wp.max(t_bare + rho * (1.0 - t_bare), 1.0e-12)
+        k[ch] = (1.0 - a * (1.0 - t_bare)) / wp.max(1.0 - a * (1.0 - coat[ch] * inv), 1.0e-12)
+    return k
 
 
 @wp.func
@@ -162,8 +175,8 @@ def entry_share(c: Coating, cos_o: float) -> float:
 @wp.func
 def entry_weight(c: Coating, eta: float, alpha: wp.vec2, wo_local: wp.vec3, u: wp.vec3) -> wp.vec3:
     """Given entry, the refracted sample's weight (T, 1/eta'² and the microfacet terms over the
-    density) times the exit balance k; 0 where the sample fails."""
+    density); 0 where the sample fails."""
     s = coating_sample(c, eta, alpha, wo_local, u, TRANSMISSION, True)
     if s.pdf <= 0.0:
         return wp.vec3(0.0)
-    return wp.cw_mul(s.weight, exit_balance(c, eta))
+    return s.weight

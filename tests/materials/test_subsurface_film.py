@@ -2,7 +2,8 @@
 a 0 nm film is the bare material to float rounding; over an absorbing body it is the film over an
 absorber (``thinfilm``'s opaque substrate of the same index); its lobes sample what they evaluate;
 its exit lobe hands over what the profile brings (eta², the bare lobe's energy); a flat body under
-a white sky renders the closed form R + T ρ T̄_bare / c; a white body in a white furnace never
+a white sky renders the closed form R + T ρ k T̄_coat / c (k: what the body returns of what the
+film keeps in); a white body in a white furnace never
 returns more than 1."""
 from __future__ import annotations
 
@@ -42,10 +43,14 @@ def film_RT(film: dict, cos: np.ndarray, eta: float = ETA) -> tuple[np.ndarray, 
                                                        [0.0] * (len(layers) + 2), d)
 
 
-def balance(film: dict) -> np.ndarray:
-    """k = T̄_bare / T̄_coat, with the device's midpoint rule in μ²."""
+def balance(film: dict, rho_eff: np.ndarray) -> np.ndarray:
+    """The exit balance k = (1 − a R̄_bare) / (1 − a R̄_coat) (renderer.materials.film_body), with the
+    device's midpoint rule in μ²: R̄ = 1 − T̄/eta², a = rho_eff / (T̄_bare/eta² + rho_eff R̄_bare)."""
     mu = np.sqrt((np.arange(BALANCE_NODES) + 0.5) / BALANCE_NODES)
-    return (1 - fresnel_dielectric(mu, ETA)).sum() / film_RT(film, mu)[1].sum(axis=0)
+    t_bare = (1 - fresnel_dielectric(mu, ETA)).mean() / ETA ** 2
+    t_coat = film_RT(film, mu)[1].mean(axis=0) / ETA ** 2
+    a = rho_eff / (t_bare + rho_eff * (1 - t_bare))
+    return (1 - a * (1 - t_bare)) / (1 - a * (1 - t_coat))
 
 
 def _flagged(flag: int) -> tuple[wp.Function, wp.Function]:
@@ -72,8 +77,7 @@ LOBES = {"exit": _flagged(sss.EXIT), "surface": _flagged(sss.SURFACE), "whole": 
 def test_coated_lobes_sample_what_they_evaluate(lobe, film):
     """Rough (0.3) coated boundary: sample() reports eval_pdf()'s value and density, importance and
     uniform sampling agree; the exit lobe's albedo is eta² T̄_coat / c per channel (T̄ = 2∫T μ dμ
-    of an independent host transfer-matrix film), which the step's balance k turns into the bare
-    lobe's eta² T̄_bare / c; the reflection alone is the film's R (below 1)."""
+    of the host transfer-matrix film); the reflection alone is the film's R (below 1)."""
     params = dict(reflectance=(0.5, 0.5, 0.5), roughness=0.3, **film)
     m = bsdf_moments("subsurface", params, (0.3, 0.2, 0.9), n=200_000, funcs=LOBES[lobe])
     assert m["max_inconsistency"] < 2e-3
@@ -85,8 +89,6 @@ def test_coated_lobes_sample_what_they_evaluate(lobe, film):
         t_bar = 2 * (film_RT(film, mu)[1] * mu[:, None]).mean(axis=0)
         c = exit_normalisation_host(ETA)
         np.testing.assert_allclose(m["albedo_sampled"], ETA ** 2 * t_bar / c, rtol=3e-3)
-        bare = 2 * ((1 - fresnel_dielectric(mu, ETA)) * mu).mean()
-        np.testing.assert_allclose(m["albedo_sampled"] * balance(film), ETA ** 2 * bare / c, rtol=5e-3)
     elif lobe == "surface":
         assert 0.5 < m["pdf_integral"] <= 1.0 + 0.01
         assert np.all(m["albedo_sampled"] < 1.0)
@@ -149,7 +151,9 @@ Shape "trianglemesh" "point3 P" [-40 0 -40  40 0 -40  40 0 40  -40 0 40] "intege
 def test_flat_coated_body_under_white_sky(tmp_path, film):
     """A smooth flat coated body seen from above under a white sky (rgb3): the film's mirror
     reflection R(0°) plus what enters, T(0°), spread by the profile (its integral: the reflectance)
-    and let out by the coated exit lobe with its balance: L = R + T ρ T̄_bare / c."""
+    and let out by the coated exit lobe with its balance: L = R + T ρ k T̄_coat / c. Also the
+    balance's limits: a white body lets out all the film traps (k T̄_coat = T̄_bare), a black one
+    none of it (k = 1)."""
     refl = np.array([0.9, 0.5, 0.2])
     if "layer_eta" in film:
         text = (f'"float layer_eta" [{" ".join(map(str, film["layer_eta"]))}] "float layer_thickness" '
@@ -163,7 +167,11 @@ def test_flat_coated_body_under_white_sky(tmp_path, film):
     r0, t0 = (x[0] for x in film_RT(film, np.array([1.0])))
     mu = (np.arange(20000) + 0.5) / 20000
     t_bar = 2 * (film_RT(film, mu)[1] * mu[:, None]).mean(axis=0)
-    expected = r0 + t0 * refl * t_bar * balance(film) / exit_normalisation_host(ETA)
+    expected = r0 + t0 * refl * t_bar * balance(film, refl) / exit_normalisation_host(ETA)
+    mu16 = np.sqrt((np.arange(BALANCE_NODES) + 0.5) / BALANCE_NODES)
+    np.testing.assert_allclose(balance(film, np.ones(3)) * film_RT(film, mu16)[1].mean(axis=0),
+                               (1 - fresnel_dielectric(mu16, ETA)).mean(), rtol=1e-6)
+    np.testing.assert_allclose(balance(film, np.zeros(3)), 1.0)
     stderr = img.std(0) / np.sqrt(len(img))
     assert np.all(np.abs(img.mean(0) - expected) < 4 * stderr + 0.004 * expected), (img.mean(0), expected, stderr)
     bare = float(fresnel_dielectric(np.array(1.0), ETA))
