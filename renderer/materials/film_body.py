@@ -49,7 +49,6 @@ FILM_PARAMS = (
     thinfilm.PARAMS.by_name["thicknessscale"],
     *STACK_PARAMS,
 )
-FILM_NAMES = frozenset(p.name for p in FILM_PARAMS)
 #: Nodes of the midpoint rule in μ² for the hemispherical means of the exit's balance.
 BALANCE_NODES = wp.constant(16)
 
