@@ -9,7 +9,7 @@ Shapes: a sphere and a slab (a box 6 x 6 x 1 seen from above), under a uniform s
 soft sun (a distant light of 5° angular radius at 45° elevation). Boundaries are rough
 (roughness 0.2, no multiple-scattering compensation on either side), so the sun reaches the
 medium through the boundary's glossy transmission. Metrics on the pixels the object covers
-entirely (found by the renderer itself: an emitter-free mask render): the mean per channel and
+entirely (found by the renderer itself: a black object before a white sky renders 0 there): the mean per channel and
 its relative difference, the CIELAB hue of the means and their ΔE00 (sky-lit: the sky's white is 1).
 
     WARP_CACHE_PATH=.warp-cache .venv/bin/python benchmarks/film_body.py [--res 48] [--spp 256] [--out docs/images]
