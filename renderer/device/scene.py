@@ -59,6 +59,7 @@ class Features:
     multiscatter: bool = True   # some material that may be rough counts the bounces between microfacets
     layered: bool = True        # some thinfilm takes the layered random walk (coated* always do)
     smooth: tuple[str, ...] = ()    # types whose every material is smooth: no GGX lobes compiled for them
+    coated_body: bool = True    # some subsurface material has a film on its boundary (renderer.materials.film_body)
 
 
 @dataclass
@@ -135,7 +136,9 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     dispersion = any(m.kind == dielectric.NAME and dielectric.disperses(m.values) for m in desc.materials)
     # the subsurface material's spectral bodies weigh their wavelengths with the same table
     spectral_sss = bool(np.any((mats.flags.numpy() & subsurface.SPECTRAL) != 0))
-    S.spectral, S.spectral_n = _spectral_table(thinfilm.NAME in used, dispersion or spectral_sss, thin_film, device)
+    lobes = lobe_features(desc.materials)
+    films = thinfilm.NAME in used or lobes["coated_body"]    # films integrated over the wavelength
+    S.spectral, S.spectral_n = _spectral_table(films, dispersion or spectral_sss, thin_film, device)
     media_up = upload_media(desc.media if media else [], device)
     S.media = media_up.struct
     pairs = [(s.media.inside, s.media.outside) for s in desc.shapes] if media else []
@@ -155,7 +158,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
         mix=any(m.kind == selection.MIX for m in desc.materials),
         dispersion=dispersion or spectral_sss,
         media=media,
-        **lobe_features(desc.materials),
+        **lobes,
     )
     keep = [geo, mat_keep, tex_keep, light_keep, cam_keep, S.shape_material, S.shape_light, S.shape_flip,
             S.shape_alpha, S.spectral.w, media_up.keep, S.shape_media]

@@ -30,7 +30,7 @@ from renderer.geometry.offsets import offset_origin, ray_epsilon
 from renderer.integrators.emission import emitted_adder, escaped_adder
 from renderer.integrators.path_state import PathState, ShadowRay
 from renderer.integrators.shading import load_bsdf, shading_functions
-from renderer.integrators.subsurface import subsurface_step
+from renderer.integrators.tabulated_subsurface import subsurface_step
 from renderer.lights import dispatch
 from renderer.lights.sample import light_sampler
 from renderer.materials import dielectric, disney, kind_id, subsurface

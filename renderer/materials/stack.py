@@ -47,30 +47,30 @@ def has_stack(values: dict[str, Any]) -> bool:
     return values.get("layer_eta") is not None
 
 
-def _per_layer(values: dict[str, Any], name: str, n: int, loc: Location | None) -> np.ndarray:
+def _per_layer(values: dict[str, Any], name: str, n: int, loc: Location | None, owner: str) -> np.ndarray:
     v = values.get(name)
     if v is None:
         return np.zeros(n)
     a = np.asarray(v, np.float64)
     if a.size not in (1, n):
-        raise SceneError(f'thinfilm: "{name}" needs 1 or {n} values (one per layer of "layer_eta"), got {a.size}',
+        raise SceneError(f'{owner}: "{name}" needs 1 or {n} values (one per layer of "layer_eta"), got {a.size}',
                          loc)
     return np.broadcast_to(a, (n,))
 
 
-def stack_rows(values: dict[str, Any], loc: Location | None = None) -> np.ndarray:
+def stack_rows(values: dict[str, Any], loc: Location | None = None, owner: str = "thinfilm") -> np.ndarray:
     """The stack's rows (n, 4) float32: (Cauchy A, Cauchy B, k, thickness nm), outer side first,
-    repeats and disorder applied; (0, 4) without a stack."""
+    repeats and disorder applied; (0, 4) without a stack. ``owner`` names the material in errors."""
     if not has_stack(values):
         return np.zeros((0, 4), np.float32)
     eta = np.asarray(values["layer_eta"], np.float64)
     n = eta.size
     if values.get("layer_thickness") is None:
-        raise SceneError('thinfilm: a stack ("layer_eta") needs "layer_thickness"', loc)
-    cell = np.stack([eta, *(_per_layer(values, name, n, loc) for name in _PER_LAYER)], axis=-1)
+        raise SceneError(f'{owner}: a stack ("layer_eta") needs "layer_thickness"', loc)
+    cell = np.stack([eta, *(_per_layer(values, name, n, loc, owner) for name in _PER_LAYER)], axis=-1)
     repeat = int(values.get("repeat", 1))
     if n * repeat > MAX_LAYERS:
-        raise SceneError(f"thinfilm: {n} layers x repeat {repeat} = {n * repeat} layers, more than {MAX_LAYERS}", loc)
+        raise SceneError(f"{owner}: {n} layers x repeat {repeat} = {n * repeat} layers, more than {MAX_LAYERS}", loc)
     rows = np.tile(cell, (repeat, 1))
     sigma = rows[:, 4]
     if np.any(sigma > 0.0):
@@ -79,16 +79,16 @@ def stack_rows(values: dict[str, Any], loc: Location | None = None) -> np.ndarra
     return rows[:, :4].astype(np.float32)
 
 
-def resolve_stack(values: dict[str, Any], loc: Location | None) -> dict[str, Any]:
+def resolve_stack(values: dict[str, Any], loc: Location | None, owner: str = "thinfilm") -> dict[str, Any]:
     """Checks a stack against the single-film parameters and derives its total ``thickness``."""
     if not has_stack(values):
         given = sorted(n for n in _LAYER_NAMES if n in values)
         if given:
-            raise SceneError(f'thinfilm: {", ".join(given)} describe a stack, which needs "layer_eta"', loc)
+            raise SceneError(f'{owner}: {", ".join(given)} describe a stack, which needs "layer_eta"', loc)
         return values
     clash = sorted(n for n in ("eta_film", "thickness") if n in values)
     if clash:
-        raise SceneError(f'thinfilm: {" and ".join(clash)} belong to one film; a stack ("layer_eta") gives '
+        raise SceneError(f'{owner}: {" and ".join(clash)} belong to one film; a stack ("layer_eta") gives '
                          'its layers instead', loc)
-    rows = stack_rows(values, loc)
+    rows = stack_rows(values, loc, owner)
     return values | {"thickness": float(rows[:, 3].astype(np.float64).sum())}

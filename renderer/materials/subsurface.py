@@ -20,9 +20,15 @@ The BSDF at a hit is pbrt-v4's DielectricBxDF. The integrator's subsurface step
 the BSSRDF to an exit point found by probe rays, where the BSDF becomes the exit lobe Sw
 (pbrt-v4's NormalizedFresnelBxDF, flag EXIT); otherwise the vertex keeps only the reflection
 (flag SURFACE). Without either flag (the AOV kernel) the material is the whole dielectric.
+
+An extension (pbrt-v4 has none): a thin film or multilayer stack on the boundary, given by
+``thickness`` (nm) and ``eta_film`` or by ``thinfilm``'s stack parameters (``layer_eta``, ...):
+its R and T replace the dielectric's F and 1 − F where light enters and where it leaves
+(:mod:`.film_body`, flag FILM).
 """
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -34,6 +40,10 @@ from renderer.materials.beam_diffusion import fresnel_moment1, table_rows as pro
 from renderer.materials.bsdf import (BSDF, DIFFUSE, FIRST_DERIVED_FLAG, REFLECTION, TRANSMISSION, BSDFEval,
                                      BSDFSample, failed_sample)
 from renderer.materials.dielectric import dielectric_eval, dielectric_sample
+from renderer.materials.film_body import (FILM_PARAMS, body_coating, film_boundary_eval, film_boundary_sample,
+                                          film_exit_eval, film_exit_sample, has_film, resolve_film)
+from renderer.materials.coating import Coating
+from renderer.materials.stack import stack_rows
 from renderer.materials.microfacet import ROUGHNESS_PARAMS, resolve_roughness, roughness_to_alpha
 from renderer.optics.fresnel import fresnel_dielectric
 from renderer.parameters import Parameter, Parameters, TextureRef
@@ -57,6 +67,7 @@ PARAMS = Parameters(
     Parameter("eta", "float", 1.33, 1.0e-3, doc="index of refraction of the body"),
     Parameter("g", "float", 0.0, -1.0, 1.0, doc="Henyey–Greenstein asymmetry of the body's scattering"),
     *ROUGHNESS_PARAMS,
+    *FILM_PARAMS,
 )
 SLOT = PARAMS.slots
 FLAG = PARAMS.flags
@@ -67,6 +78,8 @@ EXIT = wp.constant(FIRST_DERIVED_FLAG << 1)
 SURFACE = wp.constant(FIRST_DERIVED_FLAG << 2)
 #: The body's coefficients are constant colours: the step evaluates them per wavelength (``spectra``).
 SPECTRAL = wp.constant(FIRST_DERIVED_FLAG << 3)
+#: A film or stack coats the boundary (:mod:`.film_body`).
+FILM = wp.constant(FIRST_DERIVED_FLAG << 4)
 
 #: pbrt-v4's named media: (sigma_s', sigma_a) in mm^-1, RGB. Jensen, Marschner, Levoy and Hanrahan,
 #: "A Practical Model for Subsurface Light Transport" (SIGGRAPH 2001), Table 2; then Narasimhan,
@@ -126,7 +139,8 @@ NAMED_MEDIA: dict[str, tuple[tuple[float, float, float], tuple[float, float, flo
 def resolve(values: dict[str, Any], loc: Location | None) -> tuple[dict[str, Any], int]:
     """The coefficients of the mode the given parameters choose (pbrt-v4's four ways), checked."""
     owner = f'material "{NAME}"'
-    v = resolve_roughness(values)
+    film = FILM if has_film(values) else 0
+    v = resolve_roughness(resolve_film(values, owner, loc))
     given = {k for k in ("sigma_a", "sigma_s", "reflectance", "mfp") if k in values}
 
     def refuse_unused(names: set[str], why: str) -> None:
@@ -141,17 +155,17 @@ def resolve(values: dict[str, Any], loc: Location | None) -> tuple[dict[str, Any
                                    f'{", ".join(NAMED_MEDIA)})', loc)
         refuse_unused(given, 'with "name"')
         v["sigma_s"], v["sigma_a"] = medium     # g is taken as 0 by table_rows
-        return v, _spectral_flag(v, 0)
+        return v, _spectral_flag(v, film)
     if ("sigma_a" in values) != ("sigma_s" in values):
         have, missing = ("sigma_a", "sigma_s") if "sigma_a" in values else ("sigma_s", "sigma_a")
         raise SceneError(f'{owner}: "{have}" given without "{missing}"', loc)
     if "sigma_a" in values:
         refuse_unused(given & {"reflectance", "mfp"}, 'with "sigma_a" and "sigma_s"')
-        return v, _spectral_flag(v, 0)
+        return v, _spectral_flag(v, film)
     if "reflectance" in values:
-        return v, _spectral_flag(v, FROM_REFLECTANCE)
+        return v, _spectral_flag(v, FROM_REFLECTANCE | film)
     refuse_unused(given & {"mfp"}, 'without "reflectance"')
-    return v, _spectral_flag(v, 0)  # the declared defaults: whole milk
+    return v, _spectral_flag(v, film)  # the declared defaults: whole milk
 
 
 def _spectral_inputs(values: dict[str, Any], flags: int) -> tuple[str, str]:
@@ -181,6 +195,16 @@ def _spectra(values: dict[str, Any], flags: int) -> np.ndarray | None:
 
 def _spectral_flag(values: dict[str, Any], flags: int) -> int:
     return flags | (SPECTRAL if _spectra(values, flags) is not None else 0)
+
+
+def layer_rows(values: dict[str, Any], loc: Location | None) -> np.ndarray:
+    """The boundary's stack in the scene's layer table (none without one)."""
+    return stack_rows(values, loc, f'material "{NAME}"')
+
+
+def has_coating(values: dict[str, Any]) -> bool:
+    """Whether this material's boundary carries a film or stack (a kernel then compiles its lobes)."""
+    return has_film(values)
 
 
 def table_rows(values: dict[str, Any], loc: Location | None, thin_film: str) -> tuple[np.ndarray, str]:
@@ -229,7 +253,7 @@ def _exit_value(eta: float, wi: wp.vec3) -> float:
 
 
 @wp.func
-def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+def bare_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
     eta = b.p[SLOT.eta][0]
     if (b.flags & EXIT) != 0:
         ev = BSDFEval()
@@ -245,7 +269,7 @@ def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
 
 
 @wp.func
-def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+def bare_sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
     eta = b.p[SLOT.eta][0]
     if (b.flags & EXIT) != 0:
         if wo[2] <= 0.0:
@@ -261,6 +285,61 @@ def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
         return s
     sides = wp.where((b.flags & SURFACE) != 0, REFLECTION, REFLECTION | TRANSMISSION)
     return dielectric_sample(eta, surface_alpha(b), wo, u, sides, True)
+
+
+@wp.func
+def coating(b: BSDF) -> Coating:
+    """The boundary's film or stack (:func:`renderer.materials.film_body.body_coating`)."""
+    d = b.p[SLOT.thickness][0] + b.p[SLOT.thicknessscale][0] * b.p[SLOT.thicknessmap][0]
+    return body_coating(b, b.p[SLOT.eta_film][0], b.p[SLOT.eta][0], d, b.p[SLOT.thickness][0])
+
+
+@wp.func
+def coated_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+    """The coated boundary's lobes: the exit lobe with the coating's T, its reflection alone, or both sides."""
+    eta = b.p[SLOT.eta][0]
+    if (b.flags & EXIT) != 0:
+        return film_exit_eval(coating(b), eta, exit_normalisation(eta), wo, wi)
+    return film_boundary_eval(coating(b), eta, surface_alpha(b), wo, wi, (b.flags & SURFACE) != 0)
+
+
+@wp.func
+def coated_sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+    eta = b.p[SLOT.eta][0]
+    if (b.flags & EXIT) != 0:
+        return film_exit_sample(coating(b), eta, exit_normalisation(eta), wo, u)
+    return film_boundary_sample(coating(b), eta, surface_alpha(b), wo, u, (b.flags & SURFACE) != 0)
+
+
+@lru_cache(maxsize=None)
+def _lobes(coated: bool) -> tuple[wp.Function, wp.Function]:
+    """``eval_pdf`` and ``sample``, with the coated boundary's lobes compiled only where a kernel
+    of ``coated`` scenes can reach them."""
+
+    @wp.func
+    def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+        if wp.static(coated):
+            if (b.flags & FILM) != 0:
+                return coated_eval_pdf(b, wo, wi)
+        return bare_eval_pdf(b, wo, wi)
+
+    @wp.func
+    def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+        if wp.static(coated):
+            if (b.flags & FILM) != 0:
+                return coated_sample(b, wo, u)
+        return bare_sample(b, wo, u)
+
+    return eval_pdf, sample
+
+
+#: Every lobe: what the tests and other code call directly.
+eval_pdf, sample = _lobes(True)
+
+
+def specialised(features: Any) -> tuple[wp.Function, wp.Function]:
+    """``eval_pdf`` and ``sample`` with the coated boundary only where some subsurface material has one."""
+    return _lobes(features.coated_body)
 
 
 def exit_normalisation_host(eta: float) -> float:

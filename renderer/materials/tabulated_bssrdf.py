@@ -122,6 +122,13 @@ def _effective_albedo(rows: wp.array(dtype=wp.vec4), first: int, a: Spline) -> f
 
 
 @wp.func
+def effective_albedo(rows: wp.array(dtype=wp.vec4), first: int, rho: float) -> float:
+    """rho_eff(rho): the share of the light that enters that leaves again (the profile's integral)."""
+    a = spline_weights(rows, first, _OFF_RHO, _N_RHO, rho)
+    return wp.where(a.ok, _effective_albedo(rows, first, a), 0.0)
+
+
+@wp.func
 def profile(rows: wp.array(dtype=wp.vec4), first: int, rho: float, sigma_t: float, r: float) -> wp.vec2:
     """(S_r(r), pdf of sample_radius at r), both per unit area, for one channel."""
     if sigma_t <= 0.0:
