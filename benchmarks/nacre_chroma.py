@@ -14,7 +14,7 @@ then CIELAB (sRGB-encoded, clipped, ``skimage.color.rgb2lab``, D65). Printed per
 the chroma C*ab averaged over the map's scales, at the given angle of incidence (default 56°, the
 half-angle between the sun and the camera at the oyster). ``--light`` multiplies the reflectance
 by a light's linear RGB scaled to luminance 1, as the renderer multiplies a light's RGB by the
-film's (a grey reflector of 0.1 under the beach's warm sun has C* GREY). Still the colour of a
+film's (a grey reflector of 0.1 under the beach's warm sun has C*ab 17). Still the colour of a
 reflectance, not of a pixel: the frame adds the sky, the body under the stack and the exposure.
 """
 from __future__ import annotations
