@@ -15,6 +15,12 @@ since the material AOV does not say what is in shadow. The hue spread is taken o
 a viewer sees as coloured (L* >= 30 and C*ab >= 5; darker or greyer pixels have a hue only in
 the arithmetic): the circular standard deviation of h_ab and its 5-95 % range about the circular
 mean. Targets of the issue for the final frame: nacre mean L* >= 45, mean C*ab >= 15.
+
+CIELAB's white is D65, so a grey surface in the evening sun already has chroma (a reflectance of
+0.1 under the beach's sun alone: C*ab 17; the sunlit sand 27): a second table gives the regions
+balanced to the sun, the image divided by the sun's linear RGB at luminance 1 before the display
+path (von Kries in sRGB primaries, roughly what an eye adapted to the evening light sees). There a
+grey surface in the sun has no chroma, and what remains is the surface's own colour.
 """
 from __future__ import annotations
 
@@ -87,6 +93,18 @@ def colour_stats(lab: np.ndarray, mask: np.ndarray) -> ColourStats:
     return ColourStats(int(len(px)), float(px[:, 0].mean()), float(chroma.mean()), int(seen.sum()), sd, rng, mean_hue)
 
 
+def sun_white(scene) -> np.ndarray | None:
+    """The scene's first distant light's RGB (L times scale) at luminance 1, or None without one:
+    the white of the sun-balanced table."""
+    from renderer.color.rgb import luminance
+
+    for light in scene.lights:
+        if light.kind == "distant":
+            rgb = np.asarray(light.values["L"], np.float64) * float(light.values.get("scale", 1.0))
+            return rgb / float(luminance(rgb))
+    return None
+
+
 def regions(material: np.ndarray, names: list[str], lab: np.ndarray) -> dict[str, np.ndarray]:
     """Masks of the measured regions, from the material AOV's ids (indices into ``names``)."""
     def having(pred) -> np.ndarray:
@@ -119,14 +137,23 @@ def measure(exr: Path, scene: Path, png: Path | None = None) -> dict[str, Colour
     chans, header = read_exr(exr)
     img = np.stack([chans[c] for c in "RGB"], -1)
     lab = displayed_lab(img)
-    names = [m.name for m in load_scene(scene).materials]
+    desc = load_scene(scene)
+    names = [m.name for m in desc.materials]
     h, w = lab.shape[:2]
     print(f"{exr}: {w}x{h}, {header.get('spp', '?')} spp, scene {scene}")
     print(HEADER)
     stats = {}
-    for name, mask in regions(chans["material.id"], names, lab).items():
+    masks = regions(chans["material.id"], names, lab)
+    for name, mask in masks.items():
         stats[name] = colour_stats(lab, mask)
         print(stats[name].row(name))
+    white = sun_white(desc)
+    if white is not None:
+        balanced = displayed_lab(img / white)
+        print(f"\nbalanced to the sun (image / {np.round(white, 3).tolist()}), the same regions:")
+        print(HEADER)
+        for name, mask in masks.items():
+            print(colour_stats(balanced, mask).row(name))
     if png is not None:
         write_png(png, img)
     return stats

@@ -74,3 +74,23 @@ def test_empty_region_is_nan_not_an_error():
     lab = np.zeros((2, 2, 3))
     s = beach_colour.colour_stats(lab, np.zeros((2, 2), dtype=bool))
     assert s.pixels == 0 and np.isnan(s.mean_l)
+
+
+def test_sun_balance_takes_the_light_colour_out():
+    """A grey reflector (0.2) lit by the scene's distant light has the light's chroma as displayed,
+    and none once balanced to that light; the white is the light's RGB times scale at luminance 1."""
+    from renderer.color.rgb import luminance
+    from renderer.scene.description import CameraDesc, LightDesc, SceneDescription
+
+    sky = LightDesc("infinite", {"L": (1.0, 1.0, 1.0), "scale": 1.0})
+    sun = LightDesc("distant", {"L": (3.9, 2.7, 1.4), "scale": 2.0})
+    scene = SceneDescription(camera=CameraDesc(np.eye(4)), lights=[sky, sun])
+    white = beach_colour.sun_white(scene)
+    assert float(luminance(white)) == pytest.approx(1.0) and white[0] / white[2] == pytest.approx(3.9 / 1.4)
+    grey = np.full((1, 4, 3), 0.2) * white
+    shown = beach_colour.displayed_lab(grey)[0, 0]
+    balanced = beach_colour.displayed_lab(grey / white)[0, 0]
+    assert np.hypot(*shown[1:]) > 15.0
+    assert np.hypot(*balanced[1:]) < 0.8                     # 8-bit quantisation only
+    assert balanced[0] == pytest.approx(shown[0], abs=3.0)   # the same lightness, near enough
+    assert beach_colour.sun_white(SceneDescription(camera=CameraDesc(np.eye(4)), lights=[sky])) is None
