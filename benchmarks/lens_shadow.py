@@ -6,7 +6,8 @@ direction, and the shadow's colour.
     python benchmarks/lens_shadow.py --res 1080x1920 --spp 64
 
 Sun only: the scene's sky (its ``infinite`` light) is dropped; the camera, exposure and sun are
-the frame's. Five renders of a crop around the shadow, each through the renderer's API:
+the frame's. Six renders of a crop around the shadow (after two small full frames that find it),
+each through the renderer's API:
 
 - regions, by direct light only (depth 1), where the sand (material AOV) is: in the lens's shadow
   (black with the lenses opaque, lit with the lenses made invisible by the ``interface``
@@ -33,15 +34,17 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import time
+from pathlib import Path
 
 import numpy as np
 import trimesh
 
 from beach_colour import displayed_lab
-from beach_scene import ASSETS, SCENES, sun_direction
+from beach_scene import ASSETS, ROOT, SCENES, sun_direction
 from lens_reflection import lens_front, lens_material
 from renderer.api import load_scene, open_session, settings_for
 from renderer.integrators.aov import render_aovs
+from renderer.io.images import write_png
 from renderer.materials import material
 from renderer.optics.arrays import multilayer_rgb
 from renderer.scene.description import SceneDescription
@@ -147,6 +150,7 @@ def main() -> None:
     ap.add_argument("--res", default="540x960", help="the frame's resolution the crop is cut from")
     ap.add_argument("--spp", type=int, default=64, help="samples per pixel of the scene-depth renders")
     ap.add_argument("--ring", type=int, default=6, help="width of the sunlit band beside the shadow, pixels")
+    ap.add_argument("--out", type=Path, default=ROOT / "out" / "lens_shadow", help="where the crops' PNG goes")
     a = ap.parse_args()
     W, H = (int(x) for x in a.res.split("x"))
     desc = load_scene(SCENES / "beach.pbrt")
@@ -169,7 +173,7 @@ def main() -> None:
               for k in ("opaque", "removed", "through")}
     sand = direct["opaque"][1] == sand_id
     shadow, beside = regions(direct["opaque"][0], direct["removed"][0], sand, a.ring)
-    frame = {k: rendered(variant(desc, k, (W, H), bounds), a.spp, depth) for k in ("through", "opaque")}
+    frame = {k: rendered(variant(desc, k, (W, H), bounds), a.spp, depth) for k in ("through", "opaque", "removed")}
     seconds = sum(r[2] for r in (*direct.values(), *frame.values()))
 
     sun = sun_direction()
@@ -197,6 +201,9 @@ def main() -> None:
     print(f"direct light in the shadow over the same pixels with the lenses removed (the lens's T as rendered): "
           f"luminance {lens_T:.3f} ({lens_T / expected - 1.0:+.1%} against expected), by channel "
           f"{np.round(through[shadow].mean(0) / removed[shadow].mean(0), 3)}")
+    scene_T = float(frame["through"][0][shadow].mean(0) @ Y709 / (frame["removed"][0][shadow].mean(0) @ Y709))
+    print(f"the same at depth {depth} (the sand's interreflections in both): {scene_T:.3f} "
+          f"({scene_T / expected - 1.0:+.1%} against expected)")
     lit = float(removed[shadow].mean(0) @ Y709 / (removed[beside].mean(0) @ Y709))
     print(f"with the lenses removed, the shadow's sand is lit {lit:.3f}x the sunlit sand beside it (its slope and "
           "ripples towards the sun): the shadow / sunlit ratio carries that factor")
@@ -205,6 +212,10 @@ def main() -> None:
     print(colour_row("lens shadow, lenses as the scene has them", frame["through"][0], shadow))
     print(colour_row("lens shadow, lenses opaque", frame["opaque"][0], shadow))
     print(colour_row("sunlit sand beside it", frame["through"][0], beside))
+    a.out.mkdir(parents=True, exist_ok=True)
+    png = a.out / f"lens_shadow_{W}x{H}.png"
+    write_png(png, np.concatenate([frame["through"][0], frame["opaque"][0]], 0))
+    print(f"wrote {png}: the crop at depth {depth}, lenses as the scene has them above, opaque to shadow rays below")
 
 
 if __name__ == "__main__":
