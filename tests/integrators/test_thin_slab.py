@@ -108,3 +108,22 @@ def test_light_sampling_and_bsdf_sampling_agree_through_the_slab(tmp_path, seed)
     mean, err = bsdf.mean(0), bsdf.std(0) / np.sqrt(len(bsdf))   # pixels as independent estimates
     assert np.all(np.abs(mis - mean) < 4.0 * err + 0.01 * mean), (mis, mean, err)
     assert np.all(err < 0.03 * mean)                    # the reference resolves a double count (2x)
+
+
+def test_thin_slab_faces_are_checked_where_the_scene_says_so(tmp_path):
+    """A thin slab's face must be smooth clear glass, and shadow rays read a shape's own material,
+    so a mix of a face is refused (both naming the file and line)."""
+    from renderer.errors import SceneError, UnsupportedError
+
+    bad = SCENE.replace('"bool thinslab" {slab}\nMakeNamedMaterial "bare"', '"bool thinslab" {slab} "float roughness" 0.1\n'
+                        'MakeNamedMaterial "bare"')
+    path = tmp_path / "rough.pbrt"
+    path.write_text(bad.format(depth=1, sun="0 1 0", radius=0, film_eta=FILM_ETA, film_nm=FILM_NM, eta=ETA,
+                               tint="0.5 0.5 0.5", slab="true", slab_shapes=""))
+    with pytest.raises(SceneError, match=r"rough\.pbrt:\d+.*thinslab"):
+        load_scene(path)
+    mixed = _faces("coated", "bare") + ('MakeNamedMaterial "half" "string type" "mix" '
+                                        '"string materials" ["coated" "ground"]\nNamedMaterial "half"\n'
+                                        'Shape "sphere" "float radius" 0.1\n')
+    with pytest.raises(UnsupportedError, match="thinslab"):
+        upload(_scene(tmp_path, mixed), "cpu", 8, 8)
