@@ -78,4 +78,4 @@ def ray_queries(features: Features) -> RayQueries:
     when the scene has cut-outs; kernels call ``transmitted`` instead of ``blocked`` only when it
     has thin slabs (renderer.integrators.thin_slab)."""
     closest, shadow = (trace, blocked) if features.alpha else (_closest, _occluded)
-    return RayQueries(closest, shadow, transmittance_query(closest))
+    return RayQueries(closest, shadow, transmittance_query(closest, features.alpha))

@@ -74,10 +74,19 @@ def _closed_form() -> np.ndarray:
     return coat * TINT ** (1.0 / cos_in) * bare
 
 
-def test_flat_slab_shadow_matches_closed_form(tmp_path):
+#: a cut-out sheet (alpha 0) between the plane and the slab: shadow rays step over it, then cross the slab
+HOLE = """NamedMaterial "ground"
+Shape "trianglemesh" "point3 P" [-20 0.5 -20  20 0.5 -20  20 0.5 20  -20 0.5 20] "integer indices" [0 1 2 0 2 3]
+    "float alpha" 0
+"""
+
+
+@pytest.mark.parametrize("hole", [False, True], ids=["plain", "alpha"])
+def test_flat_slab_shadow_matches_closed_form(tmp_path, hole):
     open_sky = render(_scene(tmp_path, ""), thin_film="rgb3")
-    scene = _scene(tmp_path, _faces("coated", "bare"))
-    assert upload(scene, "cpu", 8, 8).features.thin_slabs
+    scene = _scene(tmp_path, _faces("coated", "bare") + (HOLE if hole else ""))
+    features = upload(scene, "cpu", 8, 8).features
+    assert features.thin_slabs and features.alpha == hole
     shadow = render(scene, thin_film="rgb3")
     T = shadow / open_sky
     expected = _closed_form()
