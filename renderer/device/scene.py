@@ -55,6 +55,7 @@ class Features:
                                 # or a subsurface body is spectral: paths may have a negative channel
     media: bool = False         # volpath with participating media (renderer.media); interface shapes are then
                                 # medium boundaries the path crosses, not alpha cut-outs
+    thin_slabs: bool = False    # shadow rays cross thin slabs' faces (renderer.integrators.thin_slab; not with media)
     # Which lobes the materials can reach (renderer.materials.lobe_features); the defaults compile every lobe.
     multiscatter: bool = True   # some material that may be rough counts the bounces between microfacets
     layered: bool = True        # some thinfilm takes the layered random walk (coated* always do)
@@ -158,6 +159,8 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
         mix=any(m.kind == selection.MIX for m in desc.materials),
         dispersion=dispersion or spectral_sss,
         media=media,
+        thin_slabs=not media and any(desc.materials[s.material].kind == thinfilm.NAME
+                                     and bool(desc.materials[s.material].values.get("thinslab")) for s in desc.shapes),
         **lobes,
     )
     keep = [geo, mat_keep, tex_keep, light_keep, cam_keep, S.shape_material, S.shape_light, S.shape_flip,

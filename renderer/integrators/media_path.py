@@ -93,7 +93,7 @@ class MediaFunctions(NamedTuple):
 
 @lru_cache(maxsize=None)
 def media_functions(features: Features) -> MediaFunctions:
-    closest, _ = ray_queries(features)
+    closest = ray_queries(features).closest
     sample_light = light_sampler(*dispatch(features.lights, "sample"))
     light_sampling = features.nee and len(features.lights) > 0
 

@@ -34,7 +34,8 @@ from renderer.sampling.samplers import SamplerParams
 def integrator_kernel(features: Features, independent: bool = False) -> wp.Kernel:
     start, arrive, record = path_functions(features, independent)
     scatter = scatter_function(features, independent)
-    closest, blocked = ray_queries(features)
+    closest, blocked, transmitted = ray_queries(features)
+    thin_slabs = features.thin_slabs
     media = features.media
     in_medium = media_functions(features)
 
@@ -109,6 +110,9 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
                     ms.rng = tm.rng
                     if max3(tm.T) > 0.0:
                         st.L = st.L + wp.cw_mul(sc.shadow.L, tm.T) / mean3(wp.cw_mul(ms.r_u, tm.r))
+                elif wp.static(thin_slabs):     # through thin lenses (renderer.integrators.thin_slab)
+                    st.L = st.L + wp.cw_mul(sc.shadow.L, transmitted(scene, sc.shadow.o, sc.shadow.d,
+                                                                     sc.shadow.t_max))
                 elif not blocked(scene, sc.shadow.o, sc.shadow.d, sc.shadow.t_max):
                     st.L = st.L + sc.shadow.L
             if not sc.alive:

@@ -31,6 +31,7 @@ from renderer.integrators.emission import emitted_adder, escaped_adder
 from renderer.integrators.path_state import PathState, ShadowRay
 from renderer.integrators.shading import load_bsdf, shading_functions
 from renderer.integrators.tabulated_subsurface import subsurface_step
+from renderer.integrators.thin_slab import crosses_thin_slab
 from renderer.lights import dispatch
 from renderer.lights.sample import light_sampler
 from renderer.materials import dielectric, disney, kind_id, subsurface
@@ -186,6 +187,7 @@ def scatter_function(features: Features, independent: bool, kind: str | None = N
     subsurface_scatter = subsurface_step(shaded)
     dispersion = features.dispersion and dielectric.NAME in shaded.materials
     media = features.media
+    thin_slabs = features.thin_slabs
 
     @wp.func(inline=True)
     def scatter(scene: Scene, smp: SamplerParams, ps: PixelSample, path: PathState, hit: Hit, s_hit: Surface,
@@ -276,9 +278,15 @@ def scatter_function(features: Features, independent: bool, kind: str | None = N
         wi = wp.normalize(to_world(frame, bs.wi))
         if wp.dot(wi, s.ng) * bs.wi[2] <= 0.0:
             return out  # the sample crossed the geometric surface on the wrong side (shading-normal leak)
-        st.prev_pdf = bs.pdf
-        st.prev_specular = (bs.flags & SPECULAR) != 0
-        st.prev_p = s.p
+        passing = False
+        if wp.static(thin_slabs):
+            # through a thin slab's face the path keeps the last vertex's MIS terms: the light it
+            # finds beyond is the shadow ray's too (renderer.integrators.thin_slab)
+            passing = crosses_thin_slab(scene.mat, m, bs.flags)
+        if not passing:
+            st.prev_pdf = bs.pdf
+            st.prev_specular = (bs.flags & SPECULAR) != 0
+            st.prev_p = s.p
         st.o = offset_origin(s, wi)
         st.d = wi
         st.depth = st.depth + 1

@@ -16,6 +16,7 @@ import warp as wp
 from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import Hit, intersect, occluded, surface_at
 from renderer.geometry.offsets import offset_origin
+from renderer.integrators.thin_slab import transmittance_query
 from renderer.sampling.scramble import hash_point_direction, to_unit
 from renderer.textures import texture_eval
 
@@ -67,11 +68,14 @@ def _occluded(scene: Scene, o: wp.vec3, d: wp.vec3, t_max: float) -> bool:
 
 
 class RayQueries(NamedTuple):
-    closest: wp.Function    # (scene, o, d, t_max) -> Hit
-    blocked: wp.Function    # (scene, o, d, t_max) -> bool
+    closest: wp.Function        # (scene, o, d, t_max) -> Hit
+    blocked: wp.Function        # (scene, o, d, t_max) -> bool
+    transmitted: wp.Function    # (scene, o, d, t_max) -> vec3 through thin slabs (Features.thin_slabs)
 
 
 def ray_queries(features: Features) -> RayQueries:
     """The closest-hit and shadow queries a kernel of this feature set uses: alpha-aware ones only
-    when the scene has cut-outs."""
-    return RayQueries(trace, blocked) if features.alpha else RayQueries(_closest, _occluded)
+    when the scene has cut-outs; kernels call ``transmitted`` instead of ``blocked`` only when it
+    has thin slabs (renderer.integrators.thin_slab)."""
+    closest, shadow = (trace, blocked) if features.alpha else (_closest, _occluded)
+    return RayQueries(closest, shadow, transmittance_query(closest, features.alpha))

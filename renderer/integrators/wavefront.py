@@ -107,12 +107,16 @@ def shade_kernel(features: Features, independent: bool, kind: str) -> wp.Kernel:
 
 @lru_cache(maxsize=None)
 def shadow_kernel(features: Features) -> wp.Kernel:
-    blocked = ray_queries(features).blocked
+    blocked, transmitted = ray_queries(features)[1:]
+    thin_slabs = features.thin_slabs
 
     def shadow(scene: Scene, paths: PathBuffers):
         i = paths.queue[SHADOWS, wp.tid()]
         paths.rays[i] = paths.rays[i] + 1
-        if not blocked(scene, paths.shadow_o[i], paths.shadow_d[i], paths.shadow_t[i]):
+        if wp.static(thin_slabs):       # through thin lenses (renderer.integrators.thin_slab)
+            paths.L[i] = paths.L[i] + wp.cw_mul(paths.shadow_L[i], transmitted(scene, paths.shadow_o[i],
+                                                                               paths.shadow_d[i], paths.shadow_t[i]))
+        elif not blocked(scene, paths.shadow_o[i], paths.shadow_d[i], paths.shadow_t[i]):
             paths.L[i] = paths.L[i] + paths.shadow_L[i]
 
     return _kernel(shadow)

@@ -306,7 +306,8 @@ def build_materials(descs: list[MaterialDesc], textures: dict[str, TextureDesc],
 
 def mix_table(descs: list[MaterialDesc], table: TextureTable, textures: dict[str, TextureDesc]) -> np.ndarray:
     """(n, 3) per mix material its two materials' indices (named materials, by name) and its amount
-    texture; zeros elsewhere. A mix of the interface material, a chain of mixes deeper than
+    texture; zeros elsewhere. A mix of the interface material or of a thin slab's face
+    (renderer.integrators.thin_slab), a chain of mixes deeper than
     selection.MAX_DEPTH and a cycle are refused."""
     out = np.zeros((max(1, len(descs)), 3), np.int32)
     named = {d.name: i for i, d in enumerate(descs) if d.name}
@@ -318,6 +319,9 @@ def mix_table(descs: list[MaterialDesc], table: TextureTable, textures: dict[str
                 raise SceneError(f'material "mix": no named material "{child}"', d.loc)
             if descs[named[child]].kind == selection.INTERFACE:
                 raise UnsupportedError(f'material "mix": a mix of the interface material ("{child}") is not supported',
+                                       d.loc)
+            if descs[named[child]].values.get("thinslab"):     # shadow rays see a shape's own material only
+                raise UnsupportedError(f'material "mix": a mix of a "thinslab" face ("{child}") is not supported',
                                        d.loc)
             out[i, j] = named[child]
         p = selection.PARAMS[selection.MIX].by_name["amount"]

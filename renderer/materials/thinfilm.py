@@ -78,6 +78,8 @@ PARAMS = Parameters(
     *ROUGHNESS_PARAMS,
     Parameter("multiscatter", "bool", True, doc="rough coatings: count the bounces between microfacets (energy "
               "compensation coloured by the coating, docs/thinfilm.md)"),
+    Parameter("thinslab", "bool", False, doc="a face of a thin closed slab (a lens): shadow rays cross it with its "
+              "T and half a pass of the tint (docs/thinfilm.md, \"Shadows through thin lenses\")"),
 )
 SLOT = PARAMS.slots
 FLAG = PARAMS.flags
@@ -94,6 +96,10 @@ def resolve(values: dict[str, Any], loc: Location | None) -> tuple[dict[str, Any
     if values.get("layered") and (values.get("transmission") or values.get("k_inner", 0.0) > 0.0):
         raise SceneError('thinfilm: "layered" puts a Lambertian base under a clear substrate: it excludes '
                          '"transmission" and "k_inner"', loc)
+    if values.get("thinslab") and (not values.get("transmission") or values.get("layered") or "displacement" in values
+                                   or any(values.get(n, 0.0) for n in ("roughness", "uroughness", "vroughness"))):
+        raise SceneError('thinfilm: "thinslab" is a smooth clear face: it needs "transmission" true and no '
+                         '"layered", roughness or displacement', loc)
     walk = [n for n in ("maxdepth", "nsamples") if n in values]
     if walk and not values.get("layered"):
         raise SceneError(f'thinfilm: {" and ".join(walk)} belong to the layered walk, which needs "layered" true',
@@ -178,6 +184,21 @@ def _tinted(b: BSDF, v: wp.vec3, wo: wp.vec3, wi: wp.vec3) -> wp.vec3:
         return v
     tint = wp.min(wp.max(tint, wp.vec3(0.0)), wp.vec3(1.0))
     return wp.cw_mul(v, wp.vec3(wp.pow(tint[0], x), wp.pow(tint[1], x), wp.pow(tint[2], x)))
+
+
+@wp.func
+def slab_face_transmittance(b: BSDF, cos_d: float) -> wp.vec3:
+    """What this face of a thin slab passes of light that crosses it without turning (a shadow ray
+    at cosine cos_d to the normal; light comes from the side it points to): the coating's T from
+    that side (inside: at the angle Snell's law gives) and half a pass of the tint there, as the
+    refraction lobe charges it. The 1/η² of entering and η² of leaving cancel over the slab."""
+    eta = _eta(b)
+    sin2_in = (1.0 - cos_d * cos_d) / (eta * eta)
+    if sin2_in >= 1.0:
+        return wp.vec3(0.0)
+    cos_in = wp.sqrt(1.0 - sin2_in)
+    r, t = coating_RT(b, wp.where(cos_d > 0.0, cos_d, -cos_in))
+    return _tinted(b, t, wp.vec3(0.0, 0.0, 1.0), wp.vec3(0.0, 0.0, -cos_in))
 
 
 @wp.func

@@ -20,7 +20,7 @@ PBRT = ROOT / "tests" / "data" / "pbrt"
 
 #: (scene, sampler or None for the scene's, width, height, spp): together they cover every
 #: material family, mixes, alpha cut-outs, dispersion, subsurface scattering, bump maps,
-#: environment, distant and area lights, and four samplers (checked below).
+#: environment, distant and area lights, thin slabs, and four samplers (checked below).
 CASES = [
     (ROOT / "scenes" / "demo.pbrt", None, 32, 18, 2),                 # zsobol; glass, metals, area light
     (ROOT / "scenes" / "demo.pbrt", "independent", 32, 18, 2),
@@ -32,6 +32,7 @@ CASES = [
     (ROOT / "scenes" / "ar_coating.pbrt", None, 32, 18, 2),           # thin film
     (PBRT / "v3_materials_upgraded.pbrt", "halton", 32, 24, 2),       # coatings, a bump map, a mix
     (PBRT / "subsurface_skin.pbrt", None, 24, 24, 2),                 # pbrt-v4's subsurface, spectral body
+    (PBRT / "thin_slab_shadow.pbrt", None, 24, 18, 2),                # shadow rays through a thin lens
 ]
 
 
@@ -49,7 +50,7 @@ def test_cases_cover_the_features():
     assert {"diffuse", "dielectric", "conductor", "thinfilm", "disney", "coateddiffuse", "subsurface"} <= kinds, kinds
     lights = {k for f in features for k in f.lights}
     assert {"infinite", "distant", "diffuse"} <= lights, lights
-    for flag in ("mix", "alpha", "dispersion", "subsurface", "bump"):
+    for flag in ("mix", "alpha", "dispersion", "subsurface", "bump", "thin_slabs"):
         assert any(getattr(f, flag) for f in features), flag
     samplers = {c[1] or load_scene(c[0]).sampler.kind for c in CASES}
     assert {"independent", "stratified", "zsobol", "halton"} <= samplers, samplers
