@@ -22,6 +22,8 @@ from renderer.errors import RenderError
 
 #: The architecture compiled for when none is named and no GPU is present: sm_90 (H100/H200).
 DEFAULT_ARCH = 90
+
+
 @dataclass(frozen=True)
 class Budget:
     """Per-thread resources a render kernel may use on sm_90."""
@@ -33,9 +35,10 @@ class Budget:
 #: The design's budget (DESIGN.md, "GPU budget"): 128 registers (16 resident warps per SM) and a
 #: 1 KB local frame, spills included.
 TARGET = Budget(registers=128, stack_bytes=1024)
-#: What CI holds the representative scene's kernels to today (tests/device): the figures measured
-#: when it was set, so a change that needs more stack or breaks CUDA compilation fails. The
-#: registers are at the hardware's 255 until the path kernel is split (docs/gpu.md). The frame was
+#: What CI holds the representative scene's megakernel to today (tests/device; its wavefront
+#: kernels, what a CUDA render launches, are held to TARGET): the figures measured when it was set,
+#: so a change that needs more stack or breaks CUDA compilation fails. The megakernel's registers
+#: are at the hardware's 255 (docs/gpu.md). The frame was
 #: 1,136 B; the multiscatter lobes (846abb8) made it 1,392 B, compiled into every dielectric and
 #: conductor kernel even where no material turns them on. Kernels now compile only the lobes the
 #: scene's materials reach (Features.multiscatter, .layered, .smooth): 1,104 B (860 KB of code),
