@@ -39,8 +39,11 @@ def open_session(scene: SceneDescription, settings: RenderSettings, device: str 
     refused before anything is allocated. ``wavefront``: the wavefront integrator (True) or the
     megakernel (False) instead of the device's default (the wavefront on CUDA); the same image.
     ``render`` and the ``render`` command both start here."""
+    from renderer.device.scene import uses_media
+    from renderer.integrators.kernels import use_wavefront
+
     limit = None if memory_limit_gb is None else int(memory_limit_gb * 2**30)
-    check_fits(scene, settings.width, settings.height, limit)
+    check_fits(scene, settings.width, settings.height, limit, use_wavefront(device, wavefront, uses_media(scene)))
     session = RenderSession(scene, settings, device=device, threads=threads, wavefront=wavefront)
     if resume is not None:
         session.restore(load_checkpoint(resume), source=str(resume))

@@ -17,6 +17,8 @@ import warnings
 from pathlib import Path
 from typing import Any, Callable
 
+from renderer.io.progress import Progress
+
 EXIT_OK, EXIT_BAD_INPUT, EXIT_BAD_SAMPLES = 0, 2, 3
 #: --write-partial-images: how often the image is rewritten, in seconds.
 PARTIAL_EVERY = 60.0
@@ -164,41 +166,6 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-class _Progress:
-    """A tqdm bar on a terminal, a plain line per ~10% otherwise (logs stay readable)."""
-
-    def __init__(self, enabled: bool, total: int, done: int):
-        self.enabled, self.total = enabled, total
-        self.bar = None
-        self.last = -1
-        self.t0 = time.perf_counter()
-        self.start = done
-
-    def __call__(self, done: int, note: str = "") -> None:
-        if not self.enabled:
-            return
-        if sys.stderr.isatty():
-            if self.bar is None:
-                from tqdm import tqdm
-
-                self.bar = tqdm(total=self.total, initial=self.start, unit="spp", file=sys.stderr)
-            self.bar.update(done - self.bar.n)
-            if note:
-                self.bar.set_postfix_str(note)
-        else:
-            decile = done * 10 // self.total
-            if decile != self.last:
-                self.last = decile
-                el = time.perf_counter() - self.t0
-                eta = el / max(done - self.start, 1) * (self.total - done)
-                print(f"render: {done}/{self.total} spp, {el:.1f} s elapsed, ETA {eta:.1f} s"
-                      f"{', ' + note if note else ''}", file=sys.stderr, flush=True)
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-
-
 class _StopSignals:
     """SIGINT/SIGTERM handling for the whole command, installed before the scene is read.
 
@@ -304,28 +271,6 @@ def main(argv: list[str] | None = None) -> int:
             return 128 + (stop.signum or signal.SIGINT)
 
 
-def _compile_only(scene, settings, args: argparse.Namespace) -> int:
-    """``--compile-only``: the scene's CUDA kernels into the cache, and their table on stdout."""
-    from renderer.device.cuda_compile import compile_kernels, parse_archs, table
-    from renderer.device.scene import upload
-    from renderer.errors import RenderError
-    from renderer.integrators.kernels import render_kernels, use_wavefront
-
-    if not args.compile_only:
-        raise RenderError("--arch needs --compile-only")
-    if not args.device.startswith("cuda"):
-        raise RenderError("--compile-only compiles CUDA kernels: add --device cuda")
-    archs = parse_archs(args.arch)
-    # the kernels depend on the scene's features only, which an upload to the CPU determines
-    ds = upload(scene, "cpu", settings.width, settings.height, nee=settings.nee, thin_film=settings.thin_film)
-    kernels = render_kernels(ds.features, settings.sampler.name == "independent", bool(args.aov or args.denoise),
-                             use_wavefront(args.device, args.wavefront, ds.features))
-    say = (lambda _m: None) if args.quiet else (lambda m: print(m, file=sys.stderr, flush=True))
-    rows = compile_kernels(kernels, archs, say)
-    print(table(rows))
-    return EXIT_OK
-
-
 def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
     """The command after its arguments are parsed; errors and interrupts are main's."""
     from renderer.api import load_scene, open_session, settings_for
@@ -362,7 +307,14 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
                             rr_depth=args.rr_depth, thin_film=args.thin_film, sampler=args.sampler)
     x0, x1, y0, y1 = region(settings.width, settings.height)       # an empty region fails here
     if args.compile_only or args.arch:
-        return _compile_only(scene, settings, args)
+        from renderer.device.cuda_compile import compile_scene
+
+        if not args.compile_only:
+            raise RenderError("--arch needs --compile-only")
+        say = (lambda _m: None) if args.quiet else (lambda m: print(m, file=sys.stderr, flush=True))
+        print(compile_scene(scene, settings, args.device, args.arch, args.wavefront, bool(args.aov or args.denoise),
+                            say))
+        return EXIT_OK
     ref = None
     if args.reference:
         from renderer.io.images import read_image
@@ -401,7 +353,7 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
     if args.resume:
         print(f"render: resumed {args.resume} at {session.film.spp} spp", file=sys.stderr)
     spp = scene.sampler.spp if args.spp is None else args.spp
-    prog = _Progress(not args.quiet, spp, session.film.spp)
+    prog = Progress(not args.quiet, spp, session.film.spp)
     clock = {"checkpoint": time.perf_counter(), "partial": time.perf_counter()}
     partial_every = args.write_partial_every or (PARTIAL_EVERY if args.write_partial_images else None)
 

@@ -104,12 +104,13 @@ class RenderSession:
         self.film = Film(W, H, device)
         self.sampler = upload_sampler(settings.sampler, W, H, device)
         independent = settings.sampler.name == "independent"
-        self.wavefront = use_wavefront(device, wavefront, self.ds.features)   # the same image either way
+        self.wavefront = use_wavefront(device, wavefront, self.ds.features.media)   # the same image either way
         kernels = render_kernels(self.ds.features, independent, wavefront=self.wavefront)
         self.kernel = kernels.get("path")
         t0 = time.perf_counter()
-        for k in kernels.values():
-            wp.load_module(k.module, device=device)
+        # one module per kernel, compiled side by side (Warp's codegen is locked, its compilers
+        # run outside the GIL): a cold CUDA load of the wavefront takes its longest kernel's time
+        wp.force_load(device=device, modules=[k.module for k in kernels.values()], max_workers=os.cpu_count() or 1)
         own = [w] if (w := settings.sampler.warning()) else []
         self.stats = RenderStats(width=W, height=H, compile_seconds=time.perf_counter() - t0,
                                  warnings=list(dict.fromkeys(scene.warnings + self.ds.warnings + own)))   # each once

@@ -8,9 +8,11 @@ compile on a login node and render on GPU nodes, or warm a cluster's shared cach
 then read for its resources (:mod:`renderer.device.cubin`)."""
 from __future__ import annotations
 
+import os
 import re
 import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -20,6 +22,8 @@ from renderer.errors import RenderError
 
 #: The architecture compiled for when none is named and no GPU is present: sm_90 (H100/H200).
 DEFAULT_ARCH = 90
+
+
 @dataclass(frozen=True)
 class Budget:
     """Per-thread resources a render kernel may use on sm_90."""
@@ -31,9 +35,10 @@ class Budget:
 #: The design's budget (DESIGN.md, "GPU budget"): 128 registers (16 resident warps per SM) and a
 #: 1 KB local frame, spills included.
 TARGET = Budget(registers=128, stack_bytes=1024)
-#: What CI holds the representative scene's kernels to today (tests/device): the figures measured
-#: when it was set, so a change that needs more stack or breaks CUDA compilation fails. The
-#: registers are at the hardware's 255 until the path kernel is split (docs/gpu.md). The frame was
+#: What CI holds the representative scene's megakernel to today (tests/device; its wavefront
+#: kernels, what a CUDA render launches, are held to TARGET): the figures measured when it was set,
+#: so a change that needs more stack or breaks CUDA compilation fails. The megakernel's registers
+#: are at the hardware's 255 (docs/gpu.md). The frame was
 #: 1,136 B; the multiscatter lobes (846abb8) made it 1,392 B, compiled into every dielectric and
 #: conductor kernel even where no material turns them on. Kernels now compile only the lobes the
 #: scene's materials reach (Features.multiscatter, .layered, .smooth): 1,104 B (860 KB of code),
@@ -86,30 +91,66 @@ def cubin_path(module, arch: int) -> Path:
 
 
 def compile_kernels(kernels: dict[str, object], archs: list[int],
-                    say: Callable[[str], None] = lambda _m: None) -> list[CompiledKernel]:
+                    say: Callable[[str], None] = lambda _m: None, workers: int | None = None) -> list[CompiledKernel]:
     """Compile each kernel for each architecture into the kernel cache (skipping what it holds)
-    and read back its resources. ``say`` gets a line before each compile and every
+    and read back its resources, in the order given. ``workers`` modules compile at once (default:
+    one per CPU): Warp generates each module's source under its codegen lock, then NVRTC runs
+    outside the GIL, so the wall time nears the longest kernel's rather than the sum; the cubins
+    are the same bytes as a serial build's. The shading kernels and the megakernel, the long
+    compiles, start first. ``say`` gets a line before each compile and every
     :data:`HEARTBEAT_SECONDS` while NVRTC runs."""
-    import warp as wp
-
     from renderer.device.runtime import init_warp
 
     init_warp()
-    out = []
-    for arch in archs:
-        for name, kernel in kernels.items():
-            module = kernel.module
-            target = cubin_path(module, arch)
-            cached = target.is_file()
-            say(f"compile: {name} kernel for sm_{arch}" + (" (in the cache)" if cached else " ..."))
-            t0 = time.perf_counter()
-            with _heartbeat(say, f"compile: {name} kernel for sm_{arch}", t0):
-                wp.compile_aot_module(module, arch=arch, use_ptx=False)
-            seconds = 0.0 if cached else time.perf_counter() - t0
-            if not target.is_file():
-                raise RenderError(f"NVRTC wrote no cubin at {target}")
-            out.append(CompiledKernel(name, arch, seconds, cached, target, _entry(read_resources(target), kernel.key)))
-    return out
+    jobs = [(arch, name, kernel) for arch in archs for name, kernel in kernels.items()]
+    order = sorted(range(len(jobs)), key=lambda j: not _long(jobs[j][1]))
+    with ThreadPoolExecutor(max_workers=max(1, workers or os.cpu_count() or 1)) as pool:
+        futures = {j: pool.submit(_compile_one, *jobs[j], say) for j in order}
+        return [futures[j].result() for j in range(len(jobs))]
+
+
+def compile_scene(scene, settings, device: str, arch: str | None, wavefront: bool | None, aov: bool,
+                  say: Callable[[str], None] = lambda _m: None) -> str:
+    """``render --compile-only``: every kernel a render of ``scene`` with ``settings`` on ``device``
+    launches (the wavefront's or, with ``wavefront`` False, the megakernel; the AOV kernel with
+    ``aov``), compiled for the architectures ``arch`` names (:func:`parse_archs`) into the kernel
+    cache; returns their :func:`table`."""
+    from renderer.device.scene import upload
+    from renderer.integrators.kernels import render_kernels, use_wavefront
+
+    if not device.startswith("cuda"):
+        raise RenderError("--compile-only compiles CUDA kernels: add --device cuda")
+    archs = parse_archs(arch)
+    # the kernels depend on the scene's features only, which an upload to the CPU determines
+    ds = upload(scene, "cpu", settings.width, settings.height, nee=settings.nee, thin_film=settings.thin_film)
+    kernels = render_kernels(ds.features, settings.sampler.name == "independent", aov,
+                             use_wavefront(device, wavefront, ds.features.media))
+    t0 = time.perf_counter()
+    rows = compile_kernels(kernels, archs, say)
+    if any(not r.cached for r in rows):
+        say(f"compile: {len(rows)} kernels in {time.perf_counter() - t0:.0f} s wall")
+    return table(rows)
+
+
+def _long(name: str) -> bool:
+    """The kernels whose compile takes minutes: a material's shading (wavefront) or the whole path."""
+    return name.startswith("shade_") or name == "path"
+
+
+def _compile_one(arch: int, name: str, kernel, say: Callable[[str], None]) -> CompiledKernel:
+    import warp as wp
+
+    module = kernel.module
+    target = cubin_path(module, arch)
+    cached = target.is_file()
+    say(f"compile: {name} kernel for sm_{arch}" + (" (in the cache)" if cached else " ..."))
+    t0 = time.perf_counter()
+    with _heartbeat(say, f"compile: {name} kernel for sm_{arch}", t0):
+        wp.compile_aot_module(module, arch=arch, use_ptx=False)
+    seconds = 0.0 if cached else time.perf_counter() - t0
+    if not target.is_file():
+        raise RenderError(f"NVRTC wrote no cubin at {target}")
+    return CompiledKernel(name, arch, seconds, cached, target, _entry(read_resources(target), kernel.key))
 
 
 def _entry(found: list[KernelResources], key: str) -> KernelResources:

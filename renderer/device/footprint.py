@@ -5,7 +5,8 @@ out-of-memory kill halfway through an upload.
 The estimate counts the large arrays only, each as many times as it is held at the peak of an
 upload: meshes on the host and on the device plus Warp's BVH nodes; instances with their
 transforms and the top-level BVH; image textures and environment maps (8-bit files as bytes,
-others as float32, with their sampling CDFs); media grids; the film's float64 sums. Image sizes come from
+others as float32, with their sampling CDFs); media grids; the film's float64 sums; the wavefront's
+path state (about 200 bytes per pixel, all of it live for a whole pass). Image sizes come from
 file headers (no decoding). It is meant to be within a factor of two of the
 measured peak (tests check it against real renders), which is enough to tell a 2 GB scene
 from a 40 GB one."""
@@ -76,9 +77,16 @@ def _images(desc: SceneDescription) -> list[tuple[str, Path, int, int, int, obje
     return found
 
 
-def estimate(desc: SceneDescription, width: int, height: int) -> int:
-    """Bytes the render of ``desc`` at width x height is expected to hold at its peak."""
+def estimate(desc: SceneDescription, width: int, height: int, wavefront: bool = False) -> int:
+    """Bytes the render of ``desc`` at width x height is expected to hold at its peak, with the
+    wavefront integrator's path buffers if ``wavefront``: a path per pixel, as a CUDA render (one
+    chunk of rows) holds them; CPU workers hold one chunk each, a fraction of that."""
     total = _BASE + width * height * _PIXEL
+    if wavefront:
+        from renderer.integrators.path_state import FIRST_KIND, bytes_per_path
+
+        kinds = len({m.kind for m in desc.materials})            # a shading queue each, at most
+        total += width * height * bytes_per_path(True, FIRST_KIND + kinds)
     for m in desc.meshes:
         total += 2 * len(m.positions) * _VERTEX + len(m.indices) * (2 * _TRIANGLE + _BVH_PER_TRIANGLE)
     total += sum(len(s.transforms) * len(s.shapes) for s in desc.instance_sets) * _INSTANCE
@@ -87,10 +95,11 @@ def estimate(desc: SceneDescription, width: int, height: int) -> int:
     return total
 
 
-def check_fits(desc: SceneDescription, width: int, height: int, limit_bytes: int | None = None) -> int:
+def check_fits(desc: SceneDescription, width: int, height: int, limit_bytes: int | None = None,
+               wavefront: bool = False) -> int:
     """The estimate, or RenderError if it exceeds ``limit_bytes`` (default: this machine's memory).
     When one image takes most of it, the message names that file: it is what the user must change."""
-    need = estimate(desc, width, height)
+    need = estimate(desc, width, height, wavefront)
     limit = machine_memory() if limit_bytes is None else limit_bytes
     if need > limit:
         biggest = max(_images(desc), key=lambda i: i[2] * i[3] * i[4], default=None)

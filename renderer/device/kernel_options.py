@@ -33,3 +33,10 @@ from typing import Any
 KERNEL_OPTIONS: dict[str, Any] = {"enable_backward": False, "max_unroll": 1,
                                   "cpu_compiler_flags": "-march=native -menable-no-nans -Wno-nan-infinity-disabled "
                                                         "-Wno-constant-conversion"}
+
+#: ``launch_bounds`` that hold a CUDA kernel to 128 registers (the budget in DESIGN.md): blocks of
+#: 256 threads (Warp's CUDA launches) of which at least two stay resident per SM, so ptxas fits each
+#: thread in 65,536 / 512 registers instead of up to 255. What does not fit spills into the frame,
+#: so it is applied only where the frame measured within 1 KB under it (the wavefront's
+#: ``CAPPED_KINDS``). The CPU ignores it: its code and images are unchanged.
+GPU_LAUNCH_BOUNDS = (256, 2)

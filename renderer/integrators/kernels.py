@@ -12,10 +12,11 @@ import warp as wp
 from renderer.device.scene import Features
 
 
-def use_wavefront(device: str, wavefront: bool | None, features: Features) -> bool:
+def use_wavefront(device: str, wavefront: bool | None, media: bool) -> bool:
     """Whether a render on ``device`` runs the wavefront: as asked, else on CUDA devices only; never
-    for a scene with media (asking for it then is an error)."""
-    if features.media:
+    for a scene with ``media`` (``Features.media``, :func:`renderer.device.scene.uses_media`;
+    asking for it then is an error)."""
+    if media:
         if wavefront:
             from renderer.errors import RenderError
 

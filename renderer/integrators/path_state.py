@@ -102,6 +102,18 @@ def path_buffers(n: int, sampled: bool, queue_of_kind: list[int], device: str) -
     return b
 
 
+def bytes_per_path(sampled: bool, queues: int) -> int:
+    """Device memory of :class:`PathBuffers` per path, from its fields' types: every per-path array,
+    the pixel sample only when ``sampled``, and one index in each of ``queues`` queues (the queue
+    counters and the kind table do not grow with the paths)."""
+    total = 0
+    for name, var in PathBuffers.vars.items():
+        if name in ("queued", "queue_of_kind") or (name == "sample" and not sampled):
+            continue
+        total += wp.types.type_size_in_bytes(var.type.dtype) * (queues if name == "queue" else 1)
+    return total
+
+
 @wp.func
 def load_path(b: PathBuffers, i: int) -> PathState:
     st = PathState()

@@ -24,7 +24,7 @@ from functools import lru_cache
 
 import warp as wp
 
-from renderer.device.kernel_options import KERNEL_OPTIONS
+from renderer.device.kernel_options import GPU_LAUNCH_BOUNDS, KERNEL_OPTIONS
 from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import surface_at
 from renderer.integrators.path_state import (FIRST_KIND, RAYS, SHADOWS, PathBuffers, load_path, path_buffers, push,
@@ -35,9 +35,20 @@ from renderer.materials import REGISTRY, kind_id
 from renderer.sampling.samplers import PixelSample, SamplerParams
 
 
-def _kernel(f) -> wp.Kernel:
-    """A render kernel in a module of its own (compiled, cached and measured alone)."""
-    return wp.kernel(f, module="unique", module_options=KERNEL_OPTIONS)
+#: The material kinds whose shading kernels, in scenes without bump maps, fit 128 registers under
+#: GPU_LAUNCH_BOUNDS with a frame within 1 KB (sm_90, docs/gpu.md "Register cap": the demo's
+#: conductor, dielectric and diffuse at 896-968 B, ar_coating's diffuse at 664 B). The others keep
+#: up to 255 registers, as capped their spills overflow the frame: the thin film's (ar_coating
+#: 1,392 B, the beach 4,152 B) and every kernel with a bump map's texture program (the beach's
+#: conductor, diffuse and disney: 1,632-1,984 B).
+CAPPED_KINDS = frozenset({"conductor", "dielectric", "diffuse"})
+
+
+def _kernel(f, capped: bool = False) -> wp.Kernel:
+    """A render kernel in a module of its own (compiled, cached and measured alone); ``capped``: held
+    to 128 registers on CUDA."""
+    return wp.kernel(f, module="unique", module_options=KERNEL_OPTIONS,
+                     launch_bounds=GPU_LAUNCH_BOUNDS if capped else None)
 
 
 @lru_cache(maxsize=None)
@@ -102,7 +113,7 @@ def shade_kernel(features: Features, independent: bool, kind: str) -> wp.Kernel:
         if sc.alive:
             push(paths, RAYS, i)
 
-    return _kernel(shade)
+    return _kernel(shade, kind in CAPPED_KINDS and not features.bump)
 
 
 @lru_cache(maxsize=None)

@@ -11,7 +11,7 @@ import warp as wp
 
 from renderer.cli import main
 from renderer.device.cubin import read_resources, tool
-from renderer.device.cuda_compile import BUDGET, compile_kernels, cubin_path, parse_archs
+from renderer.device.cuda_compile import BUDGET, TARGET, compile_kernels, cubin_path, parse_archs
 from renderer.device.runtime import init_warp
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -61,6 +61,26 @@ def test_cubin_resources_are_read():
         assert entry.local_loads == 0 and entry.local_stores == 0
 
 
+def test_parallel_compile_writes_the_serial_cubins(tmp_path, monkeypatch):
+    """Kernels compiled side by side (one thread each) are byte for byte the cubins a serial build
+    writes, under the same names: Warp's code generation is locked, and NVRTC's output depends on
+    the source alone."""
+    from renderer.api import load_scene
+    from renderer.device.film import accumulate
+    from renderer.device.scene import upload
+    from renderer.integrators.wavefront import intersect_kernel, shadow_kernel
+
+    features = upload(load_scene(REPRESENTATIVE), "cpu", 8, 8).features
+    kernels = {"film": accumulate, "intersect": intersect_kernel(features), "shadow": shadow_kernel(features)}
+    built = {}
+    for workers in (1, 3):
+        monkeypatch.setattr(wp.config, "kernel_cache_dir", str(tmp_path / f"workers{workers}"))
+        rows = compile_kernels(kernels, [90], workers=workers)
+        assert [r.name for r in rows] == list(kernels) and not any(r.cached for r in rows)
+        built[workers] = {r.cubin.relative_to(tmp_path / f"workers{workers}"): r.cubin.read_bytes() for r in rows}
+    assert built[1] == built[3]
+
+
 @pytest.mark.parametrize("text,why", [("sm_12", "not an architecture"), ("gpu", "not an architecture")])
 def test_bad_arch_refused(text, why, capsys):
     assert main([str(REPRESENTATIVE), "--device", "cuda", "--compile-only", "--arch", text]) == 2
@@ -76,18 +96,34 @@ def test_archs_parse():
     assert parse_archs("sm_75, 86,sm_90,sm_90") == [75, 86, 90]
 
 
-def test_representative_scene_compiles_within_budget(capsys):
-    """The demo's megakernel (``--no-wavefront``; a CUDA render launches the wavefront's kernels,
-    whose small ones tests/integrators/test_wavefront.py holds to the target) and the film's
-    accumulation compile for sm_90 and fit the budget."""
+def _compiled(capsys, *flags: str) -> dict[str, tuple[int, int]]:
+    """Registers and frame bytes per kernel of the demo, from ``--compile-only``'s table (sm_90)."""
     assert main([str(REPRESENTATIVE), "--device", "cuda", "--compile-only", "--arch", "sm_90", "--quiet",
-                 "--no-wavefront"]) == 0
+                 *flags]) == 0
     rows = [line.split("|")[1:-1] for line in capsys.readouterr().out.splitlines()[2:]]
-    figures = {r[0].strip(): (int(r[2]), int(r[3])) for r in rows}
+    return {r[0].strip(): (int(r[2]), int(r[3])) for r in rows}
+
+
+def test_representative_scene_compiles_within_budget(capsys):
+    """The demo's megakernel (``--no-wavefront``: what scenes with media launch on CUDA) and the
+    film's accumulation compile for sm_90 and fit the budget."""
+    figures = _compiled(capsys, "--no-wavefront")
     assert set(figures) == {"path", "film"}
     for name, (registers, stack) in figures.items():
         assert registers <= BUDGET.registers, (name, registers)
         assert stack <= BUDGET.stack_bytes, (name, stack)
+
+
+def test_representative_scene_wavefront_fits_the_target(capsys):
+    """What a CUDA render of the demo launches, the wavefront's kernels (its shading kernels under the
+    register cap) and the film's accumulation, fits the design's budget: 128 registers and a frame
+    within 1 KB per kernel."""
+    figures = _compiled(capsys)
+    assert set(figures) == {"start", "intersect", "hits", "shade_conductor", "shade_dielectric", "shade_diffuse",
+                            "shadow", "finish", "film"}
+    for name, (registers, stack) in figures.items():
+        assert registers <= TARGET.registers, (name, registers)
+        assert stack <= TARGET.stack_bytes, (name, stack)
 
 
 def test_gpu_check_refuses_without_a_gpu():

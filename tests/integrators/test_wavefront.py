@@ -82,9 +82,9 @@ def test_resume_across_integrators():
 
 def test_device_default_and_kernels():
     features = upload(load_scene(CASES[0][0]), "cpu", 8, 8).features
-    assert use_wavefront("cuda", None, features) and use_wavefront("cuda:1", None, features)
-    assert not use_wavefront("cpu", None, features)
-    assert use_wavefront("cpu", True, features) and not use_wavefront("cuda", False, features)
+    assert use_wavefront("cuda", None, features.media) and use_wavefront("cuda:1", None, features.media)
+    assert not use_wavefront("cpu", None, features.media)
+    assert use_wavefront("cpu", True, features.media) and not use_wavefront("cuda", False, features.media)
     names = list(render_kernels(features, False, wavefront=True))
     assert names == ["start", "intersect", "hits", *[f"shade_{k}" for k in features.materials], "shadow",
                      "finish", "film"]
@@ -95,9 +95,9 @@ def test_scenes_with_media_keep_the_megakernel():
     """Only the megakernel tracks media: a CUDA render of a scene with a medium uses it, and asking
     for the wavefront is refused in one sentence."""
     features = upload(load_scene(PBRT / "media_fog.pbrt"), "cpu", 8, 8).features
-    assert features.media and not use_wavefront("cuda", None, features)
+    assert features.media and not use_wavefront("cuda", None, features.media)
     with pytest.raises(RenderError, match="--no-wavefront"):
-        use_wavefront("cpu", True, features)
+        use_wavefront("cpu", True, features.media)
 
 
 def test_wavefront_small_kernels_fit_the_gpu_budget():

@@ -70,3 +70,26 @@ def test_image_sizes_come_from_headers(tmp_path):
     assert image_size(tmp_path / "a.png") == (7, 5)
     assert image_size(tmp_path / "b.exr") == (11, 3)
     assert image_size(tmp_path / "c.exr") == (0, 0)
+
+
+def test_the_wavefront_path_state_is_what_its_buffers_allocate(tmp_path):
+    """With the wavefront (a CUDA render's integrator), the estimate adds the path state a pass
+    holds: here counted from the field types, there allocated by the integrator for one chunk of
+    the whole image (one worker, as on a GPU); they agree to the few bytes that do not grow with
+    the paths."""
+    from renderer.device.scene import upload
+    from renderer.integrators.path_state import PathBuffers
+    from renderer.integrators.wavefront import Wavefront, wavefront_kernels
+
+    w, h = 64, 48
+    path = tmp_path / "s.pbrt"
+    path.write_text(HEAD.format(w=w, h=h) + 'LightSource "distant" "rgb L" [1 1 1]\nShape "sphere"\n'
+                    'Material "conductor"\nShape "trianglemesh" "integer indices" [0 1 2] '
+                    '"point3 P" [0 0 0 1 0 0 0 1 0]\n')
+    desc = load_scene(path)
+    ds = upload(desc, "cpu", w, h)
+    assert len(ds.features.materials) == 2
+    wavefront = Wavefront(wavefront_kernels(ds.features, False), False, w * h, 1, "cpu")
+    allocated = sum(getattr(b, name).capacity for b in wavefront.buffers for name in PathBuffers.vars)
+    counted = estimate(desc, w, h, wavefront=True) - estimate(desc, w, h)
+    assert w * h * 150 < counted <= allocated < counted + 1024, (counted, allocated)
