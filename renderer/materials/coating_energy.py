@@ -4,19 +4,26 @@ coating and sized by the coating's own loss.
 
 Clear substrate. For a lossless coating (R + T = 1 at every facet) the single-scattering albedo seen
 at cosine μ from side A (relative index e) is, per RGB channel,
-    E_coat(μ) = E_d(μ) + ∫ (R − F)(c) (G2(wo, wr) − G2(wo, wt)) / G1(wo) dP(m),
-E_d the bare dielectric's albedo, c = wo·m the facet cosine, P the visible normals. Interpolating
-δ = R − F linearly between FACET_NODES nodes c_j turns the integral into Σ_j δ(c_j) K_j(μ, α, e), K
-tabulated (:mod:`.energy`), so the loss L(μ) = 1 − E_coat(μ) follows the coating's R wherever it
-changes with the angle (a mirror stack's band edge as well as a film's slow colour shift), and δ
-vanishes under total internal reflection, where R = F = 1. The cosine mean L̄ = 2∫L μ dμ comes from
+    E_coat(μ) = E_d(μ) + ∫ ρ(c) (1 − F(c)) (G2(wo, wr) − G2(wo, wt)) / G1(wo) dP(m),
+    ρ = (R − F) / (1 − F) = 1 − T / (1 − F),
+E_d the bare dielectric's albedo, F its Fresnel term, c = wo·m the facet cosine, P the visible
+normals. ρ, the coating's transmittance relative to the bare interface's, stays smooth through the
+critical angle (both vanish there like the refracted wave's normal wavenumber), where R − F has a
+kink. Interpolating ρ linearly between FACET_NODES nodes c_j turns the integral into
+Σ_j ρ(c_j) K_j(μ, α, e), K tabulated with the bare 1 − F inside (:mod:`.energy`), so the loss
+L(μ) = 1 − E_coat(μ) follows the coating's R wherever it changes with the angle (a mirror stack's
+band edge as well as a film's slow colour shift). The nodes are uniform in the facet's cosine on
+the rarer side (the refracted cosine when light arrives from the denser one), so both sides read
+the coating at the same configurations and the denser side's narrow cone outside total internal
+reflection gets every node; node 0 (grazing on the rarer side, where ρ is 0/0) continues node 1. The cosine mean L̄ = 2∫L μ dμ comes from
 K̄_j, the exact mean of K_j, so the lobe returns exactly L(μo):
 reflection (1 − x_A) L_A(μo) L_A(μi) / (π L̄_A), transmission G e L_A(μo) L_B(μi) / (π L̄_A L̄_B), with
 x_A = G e / L̄_A and the symmetric G from the outside: the bare interface's transmitted share x
 re-weighted by the coating's hemispherical R̄ and T̄ against the bare F̄, times L̄_out / e, clipped so
-that x ≤ 1 inside; hence η_A² f(A→B) = η_B² f(B→A), and a 0 nm coating (δ = 0) is the bare
+that x ≤ 1 inside; hence η_A² f(A→B) = η_B² f(B→A), and a 0 nm coating (ρ = 0) is the bare
 dielectric's compensation. Each evaluation reads the coating at the FACET_NODES − 1 non-grazing
-nodes from both sides (at c = 0 both R and F are 1). Equal media (e = 1) are not compensated.
+nodes from both sides. Equal media (e = 1) are not compensated. The hemispherical means R̄, T̄, F̄
+weigh the outside nodes as cosines, which they are unless the outside is the denser medium.
 
 Opaque substrate: :func:`mean_reflectance` is the F̄ of Kulla and Conty's reflection lobe.
 """
@@ -28,7 +35,8 @@ from renderer.materials.bsdf import BSDFEval, BSDFSample, failed_sample, sampled
 from renderer.materials.coating import BOTH_SIDES, Coating, coating_eval, coating_rgb, coating_sample
 from renderer.materials.energy import (FACET_NODES, MEAN_NODES, FacetVector, dielectric_albedo,
                                        dielectric_albedo_mean, dielectric_transmit_share, effective_alpha,
-                                       extra_direction, facet_weights, facet_weights_mean, mixed_pdf)
+                                       extra_direction, facet_weights, facet_weights_mean, mixed_pdf,
+                                       node_cosine)
 from renderer.materials.microfacet import is_smooth
 from renderer.optics.fresnel import fresnel_dielectric
 from renderer.vecmath import INV_PI, mean3
@@ -47,7 +55,7 @@ def mean_reflectance(c: Coating) -> wp.vec3:
 
 @wp.struct
 class FacetShift:
-    """δ(c_j) = R(c_j) − F(c_j) at the facet-cosine nodes, per channel, seen from one side."""
+    """ρ(c_j) = (R − F) / (1 − F) at the facet-cosine nodes, per channel, seen from one side."""
     r: FacetVector
     g: FacetVector
     b: FacetVector
@@ -84,6 +92,14 @@ def _node_weight(j: int) -> float:
 
 
 @wp.func
+def _relative_shift(r: wp.vec3, f: float) -> wp.vec3:
+    """ρ = (R − F) / (1 − F) at a node (0 where nothing refracts)."""
+    if f >= 1.0 - 1.0e-6:
+        return wp.vec3(0.0)
+    return (r - wp.vec3(f)) / (1.0 - f)
+
+
+@wp.func
 def _safe_div(a: wp.vec3, b: wp.vec3) -> wp.vec3:
     return wp.vec3(wp.where(b[0] > 1.0e-6, a[0] / b[0], 0.0), wp.where(b[1] > 1.0e-6, a[1] / b[1], 0.0),
                    wp.where(b[2] > 1.0e-6, a[2] / b[2], 0.0))
@@ -94,7 +110,7 @@ class CoatEnergy:
     """What the compensation lobe of a clear coating needs for one wo (see above)."""
     e: float              # relative index from wo's side
     side: float           # 1: wo outside, -1: inside
-    shift_a: FacetShift   # δ from wo's side
+    shift_a: FacetShift   # ρ from wo's side
     shift_b: FacetShift   # and from the other
     l_o: wp.vec3          # L_A(μo)
     mean_a: wp.vec3       # L̄_A
@@ -121,22 +137,33 @@ def coat_energy(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, rows: wp.ar
     r_out = wp.vec3(w0)
     t_out = wp.vec3(0.0)
     f_out = w0
-    for j in range(1, FACET_NODES):
-        cj = float(j) / float(FACET_NODES - 1)
+    for jj in range(FACET_NODES - 1):
+        j = FACET_NODES - 1 - jj
+        u = float(j) / float(FACET_NODES - 1)
+        co = node_cosine(u, eta)
+        rj, tj = coating_rgb(c, co)
+        fj = fresnel_dielectric(co, eta)
         w = _node_weight(j)
-        rj, tj = coating_rgb(c, cj)
-        fj = fresnel_dielectric(cj, eta)
-        out_r[j] = rj[0] - fj
-        out_g[j] = rj[1] - fj
-        out_b[j] = rj[2] - fj
         r_out += rj * w
         t_out += tj * w
         f_out += fj * w
-        ri, ti = coating_rgb(c, -cj)
-        fi = fresnel_dielectric(cj, 1.0 / eta)
-        in_r[j] = ri[0] - fi
-        in_g[j] = ri[1] - fi
-        in_b[j] = ri[2] - fi
+        ro = _relative_shift(rj, fj)
+        out_r[j] = ro[0]
+        out_g[j] = ro[1]
+        out_b[j] = ro[2]
+        ci = node_cosine(u, 1.0 / eta)
+        r_in, t_in = coating_rgb(c, -ci)
+        ri = _relative_shift(r_in, fresnel_dielectric(ci, 1.0 / eta))
+        in_r[j] = ri[0]
+        in_g[j] = ri[1]
+        in_b[j] = ri[2]
+    # node 0 (grazing on the rarer side: R = F = 1 and ρ = 0/0) continues node 1
+    out_r[0] = out_r[1]
+    out_g[0] = out_g[1]
+    out_b[0] = out_b[1]
+    in_r[0] = in_r[1]
+    in_g[0] = in_g[1]
+    in_b[0] = in_b[1]
     outside = FacetShift()
     outside.r = out_r
     outside.g = out_g

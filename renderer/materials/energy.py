@@ -25,10 +25,12 @@ their Monte Carlo and interpolation error (see docs/materials.md, "Energy").
 
 A coating (``thinfilm`` over a clear substrate) changes which facets reflect: its reflectance R(c) at
 the facet cosine c = wo·m differs from the bare interface's F(c). The table K_j(μ, α, e) =
-∫ h_j(c) (G2(wo, wr) − G2(wo, wt)) / G1(wo) dP(m) (the visible-normal distribution P, the reflected and
-refracted directions wr and wt, h_j the hat functions on FACET_NODES uniform nodes in c) makes the
-coating's single-scattering albedo E_coat(μ) = E_d(μ) + Σ_j (R − F)(c_j) K_j(μ) exact for R + T = 1,
-up to the linear interpolation of R − F between the nodes (:mod:`.coating_energy`).
+∫ h_j(c) (1 − F(c)) (G2(wo, wr) − G2(wo, wt)) / G1(wo) dP(m) (the visible-normal distribution P, the
+reflected and refracted directions wr and wt, h_j the hat functions on FACET_NODES uniform nodes in
+the cosine on the rarer side, u = c for e ≥ 1 and the refracted cosine for e < 1, so that from the
+denser side the nodes spread over the narrow cone outside total internal reflection)
+makes the coating's single-scattering albedo E_coat(μ) = E_d(μ) + Σ_j ρ(c_j) K_j(μ), ρ = (R − F)/(1 − F),
+exact for R + T = 1 up to the linear interpolation of ρ between the nodes (:mod:`.coating_energy`).
 
 Anisotropic alpha uses sqrt(αx αy); alpha above 1 uses the alpha = 1 row; e is clamped to
 [1/E_MAX, E_MAX]. The tables sit in the scene's layer table from row ENERGY_FIRST on, present
@@ -211,8 +213,25 @@ def _facet_row(layers: wp.array(dtype=wp.vec4), at: int) -> FacetVector:
 
 
 @wp.func
+def node_coordinate(c: float, e: float) -> float:
+    """u: the facet's cosine on the rarer side of the interface, where the nodes are uniform: c itself
+    for e ≥ 1, the refracted cosine for e < 1 (0 under total internal reflection)."""
+    if e >= 1.0:
+        return c
+    return wp.sqrt(wp.max(0.0, 1.0 - (1.0 - c * c) / (e * e)))
+
+
+@wp.func
+def node_cosine(u: float, e: float) -> float:
+    """The facet cosine c on the side of relative index e whose node coordinate is u."""
+    if e >= 1.0:
+        return u
+    return wp.sqrt(wp.max(0.0, 1.0 - e * e * (1.0 - u * u)))
+
+
+@wp.func
 def facet_weights(layers: wp.array(dtype=wp.vec4), mu: float, alpha: float, e: float) -> FacetVector:
-    """K_j(μ, α, e): how much the coating's R − F at node j adds to its albedo seen at cosine mu."""
+    """K_j(μ, α, e): how much the coating's (R − F)/(1 − F) at node j adds to its albedo seen at cosine mu."""
     s = _eta_cell(e)
     a = _cell(alpha, N_ALPHA)
     m = _cell(mu, N_MU)

@@ -11,9 +11,10 @@ The tables hold, for the grids of :mod:`.energy` (cos θ uniform on [0, 1], alph
   without the 1/e² radiance scaling (what energy conservation is about);
 * ``refraction``: the transmitted albedo of the same interface with Fresnel 0 (every facet
   refracts), which with ``conductor`` describes a coating whose reflectance differs from F;
-* ``facet_split``: K_j(μ, α, e), the same difference (reflected minus refracted G2/G1) resolved by
-  the facet cosine c = wo·m onto hat functions on N_FACET uniform nodes (:mod:`.energy`), with
-  FACET_STRATA² strata per entry (its sum over the nodes carries the coating's whole shift).
+* ``facet_split``: K_j(μ, α, e), the same difference (reflected minus refracted G2/G1) times the
+  bare transmittance 1 − F, resolved by the facet's cosine in the rarer medium (c = wo·m, or the
+  refracted cosine when e < 1) onto hat functions on N_FACET uniform nodes (:mod:`.energy`), with
+  FACET_STRATA² strata per entry.
 
 Each entry is the mean over a jittered stratified grid of visible normals (Heitz 2018) of the
 expected sample weight: F G2/G1 for the reflection and (1 − F) G2/G1 for the refraction, with the
@@ -30,7 +31,7 @@ import numpy as np
 import warp as wp
 
 from renderer.materials.bsdf import refract
-from renderer.materials.energy import E_MAX, N_ALPHA, N_ETA, N_FACET, N_MU, TABLE_PATH, FacetVector
+from renderer.materials.energy import E_MAX, N_ALPHA, N_ETA, N_FACET, N_MU, TABLE_PATH, FacetVector, node_coordinate
 from renderer.materials.microfacet import ggx_G, ggx_G1, ggx_sample_visible
 from renderer.optics.fresnel import fresnel_dielectric
 
@@ -81,7 +82,8 @@ def _albedo(mus: wp.array(dtype=float), alphas: wp.array(dtype=float), etas: wp.
 @wp.kernel
 def _facet_split(mus: wp.array(dtype=float), alphas: wp.array(dtype=float), etas: wp.array(dtype=float), strata: int,
                  seed: int, out: wp.array(dtype=FacetVector, ndim=3)):
-    """out[e, a, m][j] = the mean of h_j(wo·m) (G2(wo, wr) − G2(wo, wt)) / G1(wo) over visible normals m."""
+    """out[e, a, m][j] = the mean of h_j(c) (1 − F(c)) (G2(wo, wr) − G2(wo, wt)) / G1(wo) over visible normals
+    m, c = wo·m, h_j on the cosine in the rarer medium (:func:`.energy.node_coordinate`)."""
     ie, ia, im = wp.tid()
     mu = mus[im]
     alpha = wp.vec2(alphas[ia], alphas[ia])
@@ -103,7 +105,8 @@ def _facet_split(mus: wp.array(dtype=float), alphas: wp.array(dtype=float), etas
         wt = wp.vec3(t[0], t[1], t[2])
         if t[3] != 0.0 and wt[2] < 0.0:
             g -= ggx_G(wo, wt, alpha) / g1
-        x = wp.clamp(c, 0.0, 1.0) * float(N_FACET - 1)
+        g *= 1.0 - fresnel_dielectric(c, eta)
+        x = wp.clamp(node_coordinate(c, eta), 0.0, 1.0) * float(N_FACET - 1)
         j = wp.min(int(x), N_FACET - 2)
         f = x - float(j)
         acc[j] = acc[j] + g * (1.0 - f)
