@@ -23,6 +23,15 @@ integral at every node, and both are interpolated multilinearly in (alpha, ln e)
 ∫(1 − E(μi)) μi dωi / π = 1 − Ē at any alpha and e. The tables' own error against the lobes is
 their Monte Carlo and interpolation error (see docs/materials.md, "Energy").
 
+A coating (``thinfilm`` over a clear substrate) changes which facets reflect: its reflectance R(c) at
+the facet cosine c = wo·m differs from the bare interface's F(c). The table K_j(μ, α, e) =
+∫ h_j(c) (1 − F(c)) (G2(wo, wr) − G2(wo, wt)) / G1(wo) dP(m) (the visible-normal distribution P, the
+reflected and refracted directions wr and wt, h_j the hat functions on FACET_NODES uniform nodes in
+the cosine on the rarer side, u = c for e ≥ 1 and the refracted cosine for e < 1, so that from the
+denser side the nodes spread over the narrow cone outside total internal reflection)
+makes the coating's single-scattering albedo E_coat(μ) = E_d(μ) + Σ_j ρ(c_j) K_j(μ), ρ = (R − F)/(1 − F),
+exact for R + T = 1 up to the linear interpolation of ρ between the nodes (:mod:`.coating_energy`).
+
 Anisotropic alpha uses sqrt(αx αy); alpha above 1 uses the alpha = 1 row; e is clamped to
 [1/E_MAX, E_MAX]. The tables sit in the scene's layer table from row ENERGY_FIRST on, present
 only when a material of the scene has ``multiscatter`` on (:func:`rows`).
@@ -55,9 +64,16 @@ _OFF_D = _OFF_CAVG + N_ALPHA
 _OFF_DAVG = _OFF_D + N_ETA * N_ALPHA * N_MU
 _OFF_G = _OFF_DAVG + N_ETA * N_ALPHA
 _OFF_T0 = _OFF_G + (N_ETA // 2 + 1) * N_ALPHA
-_SIZE = _OFF_T0 + N_ETA * N_ALPHA * N_MU
-OFF_C, OFF_CAVG, OFF_D, OFF_DAVG, OFF_G, OFF_T0 = (wp.constant(v) for v in (_OFF_C, _OFF_CAVG, _OFF_D, _OFF_DAVG,
-                                                                           _OFF_G, _OFF_T0))
+#: Nodes of the coating's facet cosine c (uniform on [0, 1], a multiple of 4: a node vector is whole rows).
+N_FACET = 12
+_OFF_K = _OFF_T0 + N_ETA * N_ALPHA * N_MU
+_OFF_KAVG = _OFF_K + N_ETA * N_ALPHA * N_MU * N_FACET
+_SIZE = _OFF_KAVG + N_ETA * N_ALPHA * N_FACET
+OFF_C, OFF_CAVG, OFF_D, OFF_DAVG, OFF_G, OFF_T0, OFF_K, OFF_KAVG = (
+    wp.constant(v) for v in (_OFF_C, _OFF_CAVG, _OFF_D, _OFF_DAVG, _OFF_G, _OFF_T0, _OFF_K, _OFF_KAVG))
+FACET_NODES = wp.constant(N_FACET)
+#: A value per facet-cosine node.
+FacetVector = wp.types.vector(length=N_FACET, dtype=float)
 LOG_E_MAX = wp.constant(float(np.log(E_MAX)))
 
 
@@ -71,7 +87,8 @@ def cosine_mean(e: np.ndarray) -> np.ndarray:
 
 @lru_cache(maxsize=1)
 def table_values() -> np.ndarray:
-    """The flat float table the device reads (conductor E, Ē, dielectric E, Ē, g, refraction E), float32."""
+    """The flat float table the device reads (conductor E, Ē, dielectric E, Ē, g, refraction E, the facet
+    weights K and their cosine means), float32."""
     t = np.load(TABLE_PATH)
     ec = t["conductor"].astype(np.float64)                   # (alpha, mu)
     ed = (t["dielectric_r"] + t["dielectric_t"]).astype(np.float64)    # (eta, alpha, mu)
@@ -85,7 +102,10 @@ def table_values() -> np.ndarray:
     x_out = np.divide(tavg_d[out_], eavg_d[out_], out=np.zeros_like(loss_out), where=eavg_d[out_] > 0)
     g = x_out * loss_out / e[out_, None]
     g = np.minimum(g, np.maximum(loss_in, 0.0) * e[out_, None])   # x_in = g / (e_in (1 - Ē_in)) ≤ 1
-    flat = np.concatenate([ec.ravel(), eavg_c, ed.ravel(), eavg_d.ravel(), g.ravel(), t["refraction"].ravel()])
+    k = t["facet_split"].astype(np.float64)                  # (eta, alpha, mu, node)
+    kavg = cosine_mean(np.moveaxis(k, -2, -1))               # (eta, alpha, node)
+    flat = np.concatenate([ec.ravel(), eavg_c, ed.ravel(), eavg_d.ravel(), g.ravel(), t["refraction"].ravel(),
+                           k.ravel(), kavg.ravel()])
     assert flat.size == _SIZE
     return flat.astype(np.float32)
 
@@ -178,6 +198,68 @@ def dielectric_albedo_mean(layers: wp.array(dtype=wp.vec4), alpha: float, e: flo
     a = _cell(alpha, N_ALPHA)
     base = OFF_DAVG + int(s[0]) * N_ALPHA
     return _line(layers, base, a) * (1.0 - s[1]) + _line(layers, base + N_ALPHA, a) * s[1]
+
+
+@wp.func
+def _facet_row(layers: wp.array(dtype=wp.vec4), at: int) -> FacetVector:
+    """The node vector whose first float is at (a multiple of 4)."""
+    v = FacetVector()
+    first = ENERGY_FIRST + at / 4
+    for r in range(FACET_NODES / 4):
+        q = layers[first + r]
+        for j in range(4):
+            v[4 * r + j] = q[j]
+    return v
+
+
+@wp.func
+def node_coordinate(c: float, e: float) -> float:
+    """u: the facet's cosine on the rarer side of the interface, where the nodes are uniform: c itself
+    for e ≥ 1, the refracted cosine for e < 1 (0 under total internal reflection)."""
+    if e >= 1.0:
+        return c
+    return wp.sqrt(wp.max(0.0, 1.0 - (1.0 - c * c) / (e * e)))
+
+
+@wp.func
+def node_cosine(u: float, e: float) -> float:
+    """The facet cosine c on the side of relative index e whose node coordinate is u."""
+    if e >= 1.0:
+        return u
+    return wp.sqrt(wp.max(0.0, 1.0 - e * e * (1.0 - u * u)))
+
+
+@wp.func
+def facet_weights(layers: wp.array(dtype=wp.vec4), mu: float, alpha: float, e: float) -> FacetVector:
+    """K_j(μ, α, e): how much the coating's (R − F)/(1 − F) at node j adds to its albedo seen at cosine mu."""
+    s = _eta_cell(e)
+    a = _cell(alpha, N_ALPHA)
+    m = _cell(mu, N_MU)
+    out = FacetVector()
+    for corner in range(8):
+        ds = corner & 1
+        da = (corner >> 1) & 1
+        dm = (corner >> 2) & 1
+        w = wp.where(ds == 1, s[1], 1.0 - s[1]) * wp.where(da == 1, a[1], 1.0 - a[1]) * wp.where(dm == 1, m[1],
+                                                                                               1.0 - m[1])
+        node = ((int(s[0]) + ds) * N_ALPHA + int(a[0]) + da) * N_MU + int(m[0]) + dm
+        out = out + _facet_row(layers, OFF_K + node * FACET_NODES) * w
+    return out
+
+
+@wp.func
+def facet_weights_mean(layers: wp.array(dtype=wp.vec4), alpha: float, e: float) -> FacetVector:
+    """K̄_j = 2∫K_j(μ) μ dμ, exactly for K piecewise linear in μ."""
+    s = _eta_cell(e)
+    a = _cell(alpha, N_ALPHA)
+    out = FacetVector()
+    for corner in range(4):
+        ds = corner & 1
+        da = (corner >> 1) & 1
+        w = wp.where(ds == 1, s[1], 1.0 - s[1]) * wp.where(da == 1, a[1], 1.0 - a[1])
+        node = (int(s[0]) + ds) * N_ALPHA + int(a[0]) + da
+        out = out + _facet_row(layers, OFF_KAVG + node * FACET_NODES) * w
+    return out
 
 
 @wp.func

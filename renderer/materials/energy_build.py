@@ -10,7 +10,11 @@ The tables hold, for the grids of :mod:`.energy` (cos θ uniform on [0, 1], alph
   albedo of a rough dielectric of relative index e seen from the side the light arrives from,
   without the 1/e² radiance scaling (what energy conservation is about);
 * ``refraction``: the transmitted albedo of the same interface with Fresnel 0 (every facet
-  refracts), which with ``conductor`` describes a coating whose reflectance differs from F.
+  refracts), which with ``conductor`` describes a coating whose reflectance differs from F;
+* ``facet_split``: K_j(μ, α, e), the same difference (reflected minus refracted G2/G1) times the
+  bare transmittance 1 − F, resolved by the facet's cosine in the rarer medium (c = wo·m, or the
+  refracted cosine when e < 1) onto hat functions on N_FACET uniform nodes (:mod:`.energy`), with
+  FACET_STRATA² strata per entry.
 
 Each entry is the mean over a jittered stratified grid of visible normals (Heitz 2018) of the
 expected sample weight: F G2/G1 for the reflection and (1 − F) G2/G1 for the refraction, with the
@@ -27,12 +31,14 @@ import numpy as np
 import warp as wp
 
 from renderer.materials.bsdf import refract
-from renderer.materials.energy import E_MAX, N_ALPHA, N_ETA, N_MU, TABLE_PATH
+from renderer.materials.energy import E_MAX, N_ALPHA, N_ETA, N_FACET, N_MU, TABLE_PATH, FacetVector, node_coordinate
 from renderer.materials.microfacet import ggx_G, ggx_G1, ggx_sample_visible
 from renderer.optics.fresnel import fresnel_dielectric
 
 #: Visible normals per entry: a STRATA x STRATA jittered grid.
 STRATA = 96
+#: Visible normals per entry of ``facet_split``: a FACET_STRATA x FACET_STRATA jittered grid.
+FACET_STRATA = 160
 #: The grazing node μ = 0 is evaluated at this cosine (G1 vanishes at 0).
 MU_GRAZING = 2.0e-3
 
@@ -73,6 +79,41 @@ def _albedo(mus: wp.array(dtype=float), alphas: wp.array(dtype=float), etas: wp.
     out[ie, ia, im] = wp.vec3(acc_r / n, acc_t / n, acc_t0 / n)
 
 
+@wp.kernel
+def _facet_split(mus: wp.array(dtype=float), alphas: wp.array(dtype=float), etas: wp.array(dtype=float), strata: int,
+                 seed: int, out: wp.array(dtype=FacetVector, ndim=3)):
+    """out[e, a, m][j] = the mean of h_j(c) (1 − F(c)) (G2(wo, wr) − G2(wo, wt)) / G1(wo) over visible normals
+    m, c = wo·m, h_j on the cosine in the rarer medium (:func:`.energy.node_coordinate`)."""
+    ie, ia, im = wp.tid()
+    mu = mus[im]
+    alpha = wp.vec2(alphas[ia], alphas[ia])
+    eta = etas[ie]
+    wo = wp.vec3(wp.sqrt(1.0 - mu * mu), 0.0, mu)
+    rng = wp.rand_init(seed, (ie * 4096 + ia) * 4096 + im)
+    g1 = ggx_G1(wo, alpha)
+    acc = FacetVector()
+    inv = 1.0 / float(strata)
+    for k in range(strata * strata):
+        u = wp.vec2((float(k % strata) + wp.randf(rng)) * inv, (float(k / strata) + wp.randf(rng)) * inv)
+        wm = ggx_sample_visible(wo, alpha, u)
+        c = wp.dot(wo, wm)
+        g = float(0.0)
+        wr = wm * (2.0 * c) - wo
+        if wr[2] > 0.0:
+            g = ggx_G(wo, wr, alpha) / g1
+        t = refract(wo, wm, eta)
+        wt = wp.vec3(t[0], t[1], t[2])
+        if t[3] != 0.0 and wt[2] < 0.0:
+            g -= ggx_G(wo, wt, alpha) / g1
+        g *= 1.0 - fresnel_dielectric(c, eta)
+        x = wp.clamp(node_coordinate(c, eta), 0.0, 1.0) * float(N_FACET - 1)
+        j = wp.min(int(x), N_FACET - 2)
+        f = x - float(j)
+        acc[j] = acc[j] + g * (1.0 - f)
+        acc[j + 1] = acc[j + 1] + g * f
+    out[ie, ia, im] = acc / float(strata * strata)
+
+
 def build(strata: int = STRATA, seed: int = 1) -> dict[str, np.ndarray]:
     """The tables on the grids of :mod:`.energy`; α = 0 (a smooth lobe, never compensated) is 1.
     The node e = 1 is the limit of rough facets between nearly equal media (F = 0, the
@@ -92,9 +133,20 @@ def build(strata: int = STRATA, seed: int = 1) -> dict[str, np.ndarray]:
     o = out.numpy().astype(np.float64)
     r, t, t0 = o[..., 0], o[..., 1], o[..., 2]
     r[:, 0, :], t[:, 0, :], t0[:, 0, :] = 1.0, 0.0, 1.0
-    return {"conductor": r[0].astype(np.float32), "dielectric_r": r[1:].astype(np.float32),
+    return {"facet_split": facet_split(mus, alphas, etas[1:], seed), "conductor": r[0].astype(np.float32), "dielectric_r": r[1:].astype(np.float32),
             "dielectric_t": t[1:].astype(np.float32), "refraction": t0[1:].astype(np.float32),
             "strata": np.int32(strata), "seed": np.int32(seed)}
+
+
+def facet_split(mus: np.ndarray, alphas: np.ndarray, etas: np.ndarray, seed: int,
+                strata: int = FACET_STRATA) -> np.ndarray:
+    """K (eta, alpha, mu, node), float32; the smooth row alpha = 0 is 0 (every facet is the normal)."""
+    out = wp.zeros((len(etas), N_ALPHA, N_MU), dtype=FacetVector, device="cpu")
+    args = [wp.array(a.astype(np.float32), dtype=float, device="cpu") for a in (mus, alphas, etas)]
+    wp.launch(_facet_split, dim=out.shape, inputs=[*args, strata, seed, out], device="cpu")
+    k = out.numpy().astype(np.float64)
+    k[:, 0] = 0.0
+    return k.astype(np.float32)
 
 
 def main() -> None:

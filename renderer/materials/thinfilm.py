@@ -43,9 +43,8 @@ from renderer.errors import Location, SceneError
 from renderer.materials.bsdf import (BSDF, DIFFUSE, GLOSSY, REFLECTION, SPECULAR, TRANSMISSION, BSDFEval,
                                      BSDFSample, delta_sample, failed_sample, reflect_z, refract, same_hemisphere,
                                      sampled, signed_z)
-from renderer.materials.coating import (BOTH_SIDES, Coating, coating_eval, coating_ms_eval,
-                                        coating_ms_sample, coating_rgb, coating_sample, glossy_reflection, mean3,
-                                        mean_reflectance)
+from renderer.materials.coating import BOTH_SIDES, Coating, coating_eval, coating_rgb, coating_sample, glossy_reflection
+from renderer.materials.coating_energy import coating_ms_eval, coating_ms_sample, mean_reflectance
 from renderer.materials.energy import mirror_lost, mirror_multiple
 from renderer.materials.coating_table import coating_table
 from renderer.materials.layer_interfaces import FILM, LAMBERT, Interface
@@ -55,7 +54,7 @@ from renderer.materials.microfacet import (ROUGHNESS_PARAMS, ggx_sample_visible,
 from renderer.materials.stack import STACK_PARAMS, resolve_stack, stack_rows
 from renderer.parameters import Parameter, Parameters
 from renderer.sampling.warps import cosine_hemisphere
-from renderer.vecmath import INV_PI, max3
+from renderer.vecmath import INV_PI, max3, mean3
 
 NAME = "thinfilm"
 PARAMS = Parameters(

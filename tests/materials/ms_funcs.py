@@ -7,7 +7,8 @@ import warp as wp
 
 from renderer.materials import dielectric, thinfilm
 from renderer.materials.bsdf import BSDF, REFLECTION, TRANSMISSION, BSDFEval, BSDFSample
-from renderer.materials.coating import BOTH_SIDES, coating_eval, coating_ms_eval, coating_ms_sample, coating_sample
+from renderer.materials.coating import BOTH_SIDES, coating_eval, coating_sample
+from renderer.materials.coating_energy import coating_ms_eval, coating_ms_sample
 
 
 @wp.func

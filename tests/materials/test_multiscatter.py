@@ -53,23 +53,22 @@ def test_lossless_conductor_albedo_is_one(roughness, mu):
 @pytest.mark.parametrize("roughness", ROUGHNESS)
 @pytest.mark.parametrize("mu", COSINES)
 def test_lossless_film_over_glass_albedo_is_one(roughness, mu):
-    """A 400 nm water film on glass: 1 within 1 % per channel (measured: 0.996–1.007); the film's
+    """A 400 nm water film on glass: 1 within 0.5 % per channel (measured: 0.996–1.001); the film's
     colour moves energy between R and T, which the bare glass's tables alone get wrong by up to 2 %."""
     m = bsdf_moments("thinfilm", FILM | dict(roughness=roughness), _wo(mu), n=100_000, funcs=FILM_MS)
-    assert np.all(np.abs(m["albedo_sampled"] - 1.0) < 1e-2 + 4 * m["albedo_sampled_stderr"])
+    assert np.all(np.abs(m["albedo_sampled"] - 1.0) < 5e-3 + 4 * m["albedo_sampled_stderr"])
 
 
-@pytest.mark.parametrize("mu", [1.0, -0.5])
-def test_stack_over_glass_is_closer_to_one_than_single_scattering(mu):
-    """A 6-layer TiO2/SiO2-like mirror on glass: the compensation, built on the bare substrate with
-    the coating's reflectance shift, is approximate for coatings whose R changes fast with the angle:
-    within 10 % of 1 (measured 0.91–1.06), where single scattering loses up to 66 %."""
-    for roughness in ROUGHNESS:
-        m = bsdf_moments("thinfilm", STACK | dict(roughness=roughness), _wo(mu), n=100_000, funcs=FILM_MS)
-        ss = bsdf_moments("thinfilm", STACK | dict(roughness=roughness, multiscatter=False), _wo(mu), n=100_000)
-        assert np.all(np.abs(m["albedo_sampled"] - 1.0) < 0.1)
-        if roughness == 1.0:
-            assert np.all(np.abs(m["albedo_sampled"] - 1.0) < np.abs(ss["albedo_sampled"] - 1.0))
+@pytest.mark.parametrize("roughness", ROUGHNESS)
+@pytest.mark.parametrize("mu", [1.0, 0.15, -0.5, -0.15])
+def test_lossless_stack_over_glass_albedo_is_one(roughness, mu):
+    """A 6-layer TiO2/SiO2-like mirror on glass, whose R swings with the angle (from inside it goes
+    from 1 to 0.43 and back to 0.77 within the narrow cone outside total internal reflection): 1
+    within 0.5 % per channel (measured: 0.997–1.002 at roughness 1), where single scattering loses
+    up to 66 %, and shifting the bare interface's compensation by R − F at the macroscopic angle
+    (this lobe before) missed by up to 9 %."""
+    m = bsdf_moments("thinfilm", STACK | dict(roughness=roughness), _wo(mu), n=100_000, funcs=FILM_MS)
+    assert np.all(np.abs(m["albedo_sampled"] - 1.0) < 5e-3 + 4 * m["albedo_sampled_stderr"])
 
 
 def test_single_scattering_loses_what_the_tests_above_measure():
@@ -86,6 +85,7 @@ CASES = {
     "anisotropic glass": ("dielectric", GLASS | dict(uroughness=0.1, vroughness=0.6)),
     "gold": ("conductor", GOLD | dict(roughness=0.5)),
     "film over glass": ("thinfilm", FILM | dict(roughness=0.4)),
+    "stack over glass": ("thinfilm", STACK | dict(roughness=0.7)),
     "film over gold-like metal": ("thinfilm", dict(eta_film=1.4, thickness=300.0, eta_inner=0.2, k_inner=3.0,
                                                    roughness=0.6)),
     "film over a white base": ("thinfilm", dict(eta_film=1.55, thickness=500.0, eta_inner=1.66, reflectance=0.9,
@@ -106,9 +106,7 @@ def test_sampling_matches_evaluation_and_energy_stays_below_one(name, wo):
     if kind == "dielectric" or values.get("transmission"):
         funcs = GLASS_MS if kind == "dielectric" else FILM_MS
         m = bsdf_moments(kind, values, wo, funcs=funcs)         # energy: without the radiance scaling
-    # a film's compensation is approximate (see test_lossless_film_over_glass_albedo_is_one)
-    over = 1e-2 if kind == "thinfilm" else 5e-3
-    assert np.all(m["albedo_sampled"] <= 1.0 + over + 4 * m["albedo_sampled_stderr"])
+    assert np.all(m["albedo_sampled"] <= 1.0 + 5e-3 + 4 * m["albedo_sampled_stderr"])
 
 
 @pytest.mark.parametrize("name", list(CASES))
@@ -161,17 +159,18 @@ def _furnace(m, multiscatter: bool, spp: int) -> np.ndarray:
 @pytest.mark.parametrize("roughness", [0.3, 1.0])
 @pytest.mark.parametrize("name", ["glass", "mirror", "film over glass"])
 def test_white_furnace_closed_rough_spheres(name, roughness):
-    """Closed spheres under a sky of 1, depth 64, no roulette: 1 within 1 % for glass and the
-    mirror (measured 0.999–1.002 at 2048 spp); the film over glass within 2 % (measured 0.998–1.016:
-    its per-bounce error compounds over the internal bounces). Single scattering renders 0.35–0.65."""
+    """Closed spheres under a sky of 1, depth 64, no roulette: 1 within 1 % for glass, the mirror
+    and the film over glass (measured 0.999–1.002 for glass and mirror, 1.003 for the film at
+    roughness 1, at 2048 spp; the film was 1.003–1.016 when its compensation shifted the bare
+    interface's by R − F at the macroscopic angle). Single scattering renders 0.35–0.65."""
     m = {"glass": material("dielectric", eta=1.5, roughness=roughness),
          "mirror": material("conductor", eta=(1.0, 1.0, 1.0), k=(1000.0, 1000.0, 1000.0), roughness=roughness),
          "film over glass": material("thinfilm", eta_film=1.33, thickness=350.0, eta_inner=1.5, transmission=True,
                                      roughness=roughness, multiscatter=False)}[name]
-    on = _furnace(m, True, 512 if name == "film over glass" else 1024)
+    on = _furnace(m, True, 1024)
     off = _furnace(m, False, 64)
     assert np.all(off < 0.7)
-    np.testing.assert_allclose(on, 1.0, atol=0.02 if name == "film over glass" else 0.01)
+    np.testing.assert_allclose(on, 1.0, atol=0.01)
 
 
 @pytest.mark.parametrize("name", ["glass", "gold"])

@@ -1,0 +1,257 @@
+"""Energy compensation (``multiscatter``) of a rough coating: the light that bounces between coated
+microfacets, which single scattering drops, put back as Kulla and Conty's lobe, coloured by the
+coating and sized by the coating's own loss.
+
+Clear substrate. For a lossless coating (R + T = 1 at every facet) the single-scattering albedo seen
+at cosine μ from side A (relative index e) is, per RGB channel,
+    E_coat(μ) = E_d(μ) + ∫ ρ(c) (1 − F(c)) (G2(wo, wr) − G2(wo, wt)) / G1(wo) dP(m),
+    ρ = (R − F) / (1 − F) = 1 − T / (1 − F),
+E_d the bare dielectric's albedo, F its Fresnel term, c = wo·m the facet cosine, P the visible
+normals. ρ, the coating's transmittance relative to the bare interface's, stays smooth through the
+critical angle (both vanish there like the refracted wave's normal wavenumber), where R − F has a
+kink. Interpolating ρ linearly between FACET_NODES nodes c_j turns the integral into
+Σ_j ρ(c_j) K_j(μ, α, e), K tabulated with the bare 1 − F inside (:mod:`.energy`), so the loss
+L(μ) = 1 − E_coat(μ) follows the coating's R wherever it changes with the angle (a mirror stack's
+band edge as well as a film's slow colour shift). The nodes are uniform in the facet's cosine on
+the rarer side (the refracted cosine when light arrives from the denser one), so both sides read
+the coating at the same configurations and the denser side's narrow cone outside total internal
+reflection gets every node; node 0 (grazing on the rarer side, where ρ is 0/0) continues node 1. The cosine mean L̄ = 2∫L μ dμ comes from
+K̄_j, the exact mean of K_j, so the lobe returns exactly L(μo):
+reflection (1 − x_A) L_A(μo) L_A(μi) / (π L̄_A), transmission G e L_A(μo) L_B(μi) / (π L̄_A L̄_B), with
+x_A = G e / L̄_A and the symmetric G from the outside: the bare interface's transmitted share x
+re-weighted by the coating's hemispherical R̄ and T̄ against the bare F̄, times L̄_out / e, clipped so
+that x ≤ 1 inside; hence η_A² f(A→B) = η_B² f(B→A), and a 0 nm coating (ρ = 0) is the bare
+dielectric's compensation. Each evaluation reads the coating at the FACET_NODES − 1 non-grazing
+nodes from both sides. Equal media (e = 1) are not compensated. The hemispherical means R̄, T̄, F̄
+weigh the outside nodes as cosines, which they are unless the outside is the denser medium.
+
+Opaque substrate: :func:`mean_reflectance` is the F̄ of Kulla and Conty's reflection lobe.
+"""
+from __future__ import annotations
+
+import warp as wp
+
+from renderer.materials.bsdf import BSDFEval, BSDFSample, failed_sample, sampled, GLOSSY
+from renderer.materials.coating import BOTH_SIDES, Coating, coating_eval, coating_rgb, coating_sample
+from renderer.materials.energy import (FACET_NODES, MEAN_NODES, FacetVector, dielectric_albedo,
+                                       dielectric_albedo_mean, dielectric_transmit_share, effective_alpha,
+                                       extra_direction, facet_weights, facet_weights_mean, mixed_pdf,
+                                       node_cosine)
+from renderer.materials.microfacet import is_smooth
+from renderer.optics.fresnel import fresnel_dielectric
+from renderer.vecmath import INV_PI, mean3
+
+
+@wp.func
+def mean_reflectance(c: Coating) -> wp.vec3:
+    """R̄ = 2∫R(μ) μ dμ per channel from the outside (midpoint rule in μ²): what an opaque rough
+    coating's compensation lobe reflects per bounce (Kulla–Conty's F̄)."""
+    r = wp.vec3(0.0)
+    for j in range(MEAN_NODES):
+        rj, tj = coating_rgb(c, wp.sqrt((float(j) + 0.5) / float(MEAN_NODES)))
+        r += rj
+    return r / float(MEAN_NODES)
+
+
+@wp.struct
+class FacetShift:
+    """ρ(c_j) = (R − F) / (1 − F) at the facet-cosine nodes, per channel, seen from one side."""
+    r: FacetVector
+    g: FacetVector
+    b: FacetVector
+
+
+@wp.func
+def _shift_total(s: FacetShift, k: FacetVector) -> wp.vec3:
+    return wp.vec3(wp.dot(s.r, k), wp.dot(s.g, k), wp.dot(s.b, k))
+
+
+@wp.func
+def _loss(rows: wp.array(dtype=wp.vec4), s: FacetShift, mu: float, a: float, e: float) -> wp.vec3:
+    """L(μ) = 1 − E_coat(μ) per channel, seen from the side of relative index e."""
+    e_coat = wp.vec3(dielectric_albedo(rows, mu, a, e)) + _shift_total(s, facet_weights(rows, mu, a, e))
+    return wp.max(wp.vec3(1.0) - e_coat, wp.vec3(0.0))
+
+
+@wp.func
+def _mean_loss(rows: wp.array(dtype=wp.vec4), s: FacetShift, a: float, e: float) -> wp.vec3:
+    """L̄ = 2∫L μ dμ (L̄ ≥ 0 wherever L is, up to the clip)."""
+    e_coat = wp.vec3(dielectric_albedo_mean(rows, a, e)) + _shift_total(s, facet_weights_mean(rows, a, e))
+    return wp.max(wp.vec3(1.0) - e_coat, wp.vec3(0.0))
+
+
+@wp.func
+def _node_weight(j: int) -> float:
+    """2∫h_j(μ) μ dμ of the hat function of node j: the nodes' weights in a hemispherical mean."""
+    h = 1.0 / float(FACET_NODES - 1)
+    if j == 0:
+        return h * h / 3.0
+    if j == FACET_NODES - 1:
+        return (1.0 - h) * h + 2.0 * h * h / 3.0
+    return 2.0 * float(j) * h * h
+
+
+@wp.func
+def _relative_shift(r: wp.vec3, f: float) -> wp.vec3:
+    """ρ = (R − F) / (1 − F) at a node (0 where nothing refracts)."""
+    if f >= 1.0 - 1.0e-6:
+        return wp.vec3(0.0)
+    return (r - wp.vec3(f)) / (1.0 - f)
+
+
+@wp.func
+def _safe_div(a: wp.vec3, b: wp.vec3) -> wp.vec3:
+    return wp.vec3(wp.where(b[0] > 1.0e-6, a[0] / b[0], 0.0), wp.where(b[1] > 1.0e-6, a[1] / b[1], 0.0),
+                   wp.where(b[2] > 1.0e-6, a[2] / b[2], 0.0))
+
+
+@wp.struct
+class CoatEnergy:
+    """What the compensation lobe of a clear coating needs for one wo (see above)."""
+    e: float              # relative index from wo's side
+    side: float           # 1: wo outside, -1: inside
+    shift_a: FacetShift   # ρ from wo's side
+    shift_b: FacetShift   # and from the other
+    l_o: wp.vec3          # L_A(μo)
+    mean_a: wp.vec3       # L̄_A
+    mean_b: wp.vec3       # L̄_B
+    share: wp.vec3        # G, symmetric
+    p_ms: float           # probability of sampling the lobe
+    p_t: float            # and of transmitting, given the lobe
+
+
+@wp.func
+def coat_energy(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, rows: wp.array(dtype=wp.vec4)) -> CoatEnergy:
+    a = effective_alpha(alpha)
+    q = CoatEnergy()
+    q.side = wp.where(wo[2] > 0.0, 1.0, -1.0)
+    q.e = wp.where(wo[2] > 0.0, eta, 1.0 / eta)
+    # the coating at the nodes from both sides; node 0 (grazing) has R = F = 1, T = 0 from either
+    out_r = FacetVector()
+    out_g = FacetVector()
+    out_b = FacetVector()
+    in_r = FacetVector()
+    in_g = FacetVector()
+    in_b = FacetVector()
+    w0 = _node_weight(0)
+    r_out = wp.vec3(w0)
+    t_out = wp.vec3(0.0)
+    f_out = w0
+    for jj in range(FACET_NODES - 1):
+        j = FACET_NODES - 1 - jj
+        u = float(j) / float(FACET_NODES - 1)
+        co = node_cosine(u, eta)
+        rj, tj = coating_rgb(c, co)
+        fj = fresnel_dielectric(co, eta)
+        w = _node_weight(j)
+        r_out += rj * w
+        t_out += tj * w
+        f_out += fj * w
+        ro = _relative_shift(rj, fj)
+        out_r[j] = ro[0]
+        out_g[j] = ro[1]
+        out_b[j] = ro[2]
+        ci = node_cosine(u, 1.0 / eta)
+        r_in, t_in = coating_rgb(c, -ci)
+        ri = _relative_shift(r_in, fresnel_dielectric(ci, 1.0 / eta))
+        in_r[j] = ri[0]
+        in_g[j] = ri[1]
+        in_b[j] = ri[2]
+    # node 0 (grazing on the rarer side: R = F = 1 and ρ = 0/0) continues node 1
+    out_r[0] = out_r[1]
+    out_g[0] = out_g[1]
+    out_b[0] = out_b[1]
+    in_r[0] = in_r[1]
+    in_g[0] = in_g[1]
+    in_b[0] = in_b[1]
+    outside = FacetShift()
+    outside.r = out_r
+    outside.g = out_g
+    outside.b = out_b
+    inside = FacetShift()
+    inside.r = in_r
+    inside.g = in_g
+    inside.b = in_b
+    l_out = _mean_loss(rows, outside, a, eta)
+    l_in = _mean_loss(rows, inside, a, 1.0 / eta)
+    x = dielectric_transmit_share(rows, alpha, eta)
+    refl = r_out * ((1.0 - x) / wp.max(f_out, 1.0e-6))
+    tran = t_out * (x / wp.max(1.0 - f_out, 1.0e-6))
+    q.share = wp.min(wp.cw_mul(_safe_div(tran, refl + tran), l_out) / eta, l_in * eta)
+    if wo[2] > 0.0:
+        q.shift_a = outside
+        q.shift_b = inside
+        q.mean_a = l_out
+        q.mean_b = l_in
+    else:
+        q.shift_a = inside
+        q.shift_b = outside
+        q.mean_a = l_in
+        q.mean_b = l_out
+    q.l_o = _loss(rows, q.shift_a, wp.abs(wo[2]), a, q.e)
+    q.p_ms = wp.clamp(mean3(q.l_o), 0.0, 1.0)
+    if mean3(q.l_o) > 0.0:
+        x_a = wp.min(_safe_div(q.share * q.e, q.mean_a), wp.vec3(1.0))
+        q.p_t = wp.clamp(mean3(wp.cw_mul(x_a, q.l_o)) / mean3(q.l_o), 0.0, 1.0)
+    return q
+
+
+@wp.func
+def coat_multiple(q: CoatEnergy, alpha: wp.vec2, wi: wp.vec3, rows: wp.array(dtype=wp.vec4)) -> wp.vec3:
+    """The compensation lobe at wi (without the cosine and without the 1/e² of radiance)."""
+    a = effective_alpha(alpha)
+    if wi[2] * q.side < 0.0:
+        l_i = _loss(rows, q.shift_b, wp.abs(wi[2]), a, 1.0 / q.e)
+        return _safe_div(wp.cw_mul(q.share * (q.e * INV_PI), wp.cw_mul(q.l_o, l_i)), wp.cw_mul(q.mean_a, q.mean_b))
+    l_i = _loss(rows, q.shift_a, wp.abs(wi[2]), a, q.e)
+    x_a = wp.min(_safe_div(q.share * q.e, q.mean_a), wp.vec3(1.0))
+    return _safe_div(wp.cw_mul(wp.vec3(1.0) - x_a, wp.cw_mul(q.l_o, l_i)) * INV_PI, q.mean_a)
+
+
+@wp.func
+def coating_ms_eval(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3, radiance: bool,
+                    rows: wp.array(dtype=wp.vec4)) -> BSDFEval:
+    """:func:`coating_eval` (both sides) plus the compensation lobe (see above); the density is that
+    of :func:`coating_ms_sample`."""
+    if eta == 1.0 or is_smooth(alpha) or wo[2] == 0.0 or wi[2] == 0.0:
+        return coating_eval(c, eta, alpha, wo, wi, BOTH_SIDES, radiance)
+    return _with_multiple(c, coat_energy(c, eta, alpha, wo, rows), eta, alpha, wo, wi, radiance, rows)
+
+
+@wp.func
+def _with_multiple(c: Coating, q: CoatEnergy, eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3, radiance: bool,
+                   rows: wp.array(dtype=wp.vec4)) -> BSDFEval:
+    """Single scattering plus the lobe, for a wo whose CoatEnergy q is known."""
+    ev = coating_eval(c, eta, alpha, wo, wi, BOTH_SIDES, radiance)
+    transmit = wo[2] * wi[2] < 0.0
+    f = coat_multiple(q, alpha, wi, rows)
+    if transmit and radiance:
+        f = f / (q.e * q.e)
+    ev.f = ev.f + f
+    ev.pdf = mixed_pdf(ev.pdf, q.p_ms, q.p_t, transmit, wi)
+    return ev
+
+
+@wp.func
+def coating_ms_sample(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, u: wp.vec3, radiance: bool,
+                      rows: wp.array(dtype=wp.vec4)) -> BSDFSample:
+    """:func:`coating_sample` (both sides), or with probability mean L(μo) a cosine-distributed
+    reflection or transmission; weighted by :func:`coating_ms_eval` (its wo terms computed once)."""
+    if eta == 1.0 or is_smooth(alpha) or wo[2] == 0.0:
+        return coating_sample(c, eta, alpha, wo, u, BOTH_SIDES, radiance)
+    q = coat_energy(c, eta, alpha, wo, rows)
+    d = extra_direction(wo, u, q.p_ms, q.p_t, q.e)
+    wi = wp.vec3(d[0], d[1], d[2])
+    eta_t = d[3]
+    if d[3] < 0.0:
+        s = coating_sample(c, eta, alpha, wo, wp.vec3(u[0], u[1], (u[2] - q.p_ms) / (1.0 - q.p_ms)), BOTH_SIDES,
+                           radiance)
+        if s.pdf <= 0.0:
+            return s
+        wi = s.wi
+        eta_t = s.eta
+    if wi[2] == 0.0:
+        return failed_sample()
+    out = sampled(wo, wi, _with_multiple(c, q, eta, alpha, wo, wi, radiance, rows), GLOSSY)
+    out.eta = eta_t
+    return out
