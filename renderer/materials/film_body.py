@@ -131,8 +131,9 @@ def film_exit_eval(c: Coating, eta: float, norm: float, wo: wp.vec3, wi: wp.vec3
 
 
 @wp.func
-def film_exit_sample(c: Coating, eta: float, norm: float, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
-    """A cosine-distributed exit direction, weighted by the lobe over its density."""
+def exit_direction(wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+    """The exit lobe's cosine-distributed direction above the surface (bare or coated), with its
+    density; the caller weights it by its own lobe (a failed sample has pdf 0)."""
     if wo[2] <= 0.0:
         return failed_sample()
     wi = cosine_hemisphere(wp.vec2(u[0], u[1]))
@@ -141,8 +142,16 @@ def film_exit_sample(c: Coating, eta: float, norm: float, wo: wp.vec3, u: wp.vec
     s = BSDFSample()
     s.wi = wi
     s.pdf = wi[2] * INV_PI
-    s.weight = film_exit_value(c, eta, norm, wi) * (wi[2] / s.pdf)
     s.flags = REFLECTION | DIFFUSE
+    return s
+
+
+@wp.func
+def film_exit_sample(c: Coating, eta: float, norm: float, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+    """A cosine-distributed exit direction, weighted by the lobe over its density."""
+    s = exit_direction(wo, u)
+    if s.pdf > 0.0:
+        s.weight = film_exit_value(c, eta, norm, s.wi) * (s.wi[2] / s.pdf)
     return s
 
 

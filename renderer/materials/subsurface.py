@@ -37,17 +37,15 @@ import warp as wp
 from renderer.color import rgb_spectrum
 from renderer.errors import Location, SceneError, UnsupportedError
 from renderer.materials.beam_diffusion import fresnel_moment1, table_rows as profile_rows
-from renderer.materials.bsdf import (BSDF, DIFFUSE, FIRST_DERIVED_FLAG, REFLECTION, TRANSMISSION, BSDFEval,
-                                     BSDFSample, failed_sample)
+from renderer.materials.bsdf import BSDF, FIRST_DERIVED_FLAG, REFLECTION, TRANSMISSION, BSDFEval, BSDFSample
 from renderer.materials.dielectric import dielectric_eval, dielectric_sample
-from renderer.materials.film_body import (FILM_PARAMS, body_coating, film_boundary_eval, film_boundary_sample,
-                                          film_exit_eval, film_exit_sample, has_film, resolve_film)
+from renderer.materials.film_body import (FILM_PARAMS, body_coating, exit_direction, film_boundary_eval,
+                                          film_boundary_sample, film_exit_eval, film_exit_sample, has_film, resolve_film)
 from renderer.materials.coating import Coating
 from renderer.materials.stack import stack_rows
 from renderer.materials.microfacet import ROUGHNESS_PARAMS, resolve_roughness, roughness_to_alpha
 from renderer.optics.fresnel import fresnel_dielectric
 from renderer.parameters import Parameter, Parameters, TextureRef
-from renderer.sampling.warps import cosine_hemisphere
 from renderer.vecmath import INV_PI
 
 NAME = "subsurface"
@@ -272,16 +270,9 @@ def bare_eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
 def bare_sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
     eta = b.p[SLOT.eta][0]
     if (b.flags & EXIT) != 0:
-        if wo[2] <= 0.0:
-            return failed_sample()
-        wi = cosine_hemisphere(wp.vec2(u[0], u[1]))
-        if wi[2] <= 0.0:
-            return failed_sample()
-        s = BSDFSample()
-        s.wi = wi
-        s.pdf = wi[2] * INV_PI
-        s.weight = wp.vec3(_exit_value(eta, wi) * wi[2] / s.pdf)
-        s.flags = REFLECTION | DIFFUSE
+        s = exit_direction(wo, u)
+        if s.pdf > 0.0:
+            s.weight = wp.vec3(_exit_value(eta, s.wi) * s.wi[2] / s.pdf)
         return s
     sides = wp.where((b.flags & SURFACE) != 0, REFLECTION, REFLECTION | TRANSMISSION)
     return dielectric_sample(eta, surface_alpha(b), wo, u, sides, True)

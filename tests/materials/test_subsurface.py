@@ -16,10 +16,9 @@ from renderer.color import rgb_spectrum
 from renderer.materials import beam_diffusion as bd
 from bsdf_harness import bsdf_moments
 from renderer.materials import material
-from renderer.materials import subsurface as sss
-from renderer.materials.bsdf import BSDF, BSDFEval, BSDFSample
 from renderer.scene.description import MaterialDesc
 from renderer.materials.subsurface import exit_normalisation_host
+from subsurface_lobes import LOBES
 from renderer.materials.tabulated_bssrdf import albedo_from_reflectance, profile, sample_radius
 
 init_warp()
@@ -203,27 +202,6 @@ def test_light_sampling_and_bsdf_sampling_agree(tmp_path):
     se = d.std(0) / np.sqrt(len(d))
     assert np.all(np.abs(d.mean(0)) < 4 * se + 2e-3), (a.mean(0), b.mean(0), se)
     assert np.all(se < 0.01 * a.mean(0))
-
-
-def _with_flag(flag: int) -> tuple[wp.Function, wp.Function]:
-    """The material's (eval_pdf, sample) with a derived flag set, as the subsurface step sets it."""
-
-    @wp.func
-    def flagged_eval(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
-        c = b
-        c.flags = b.flags | flag
-        return sss.eval_pdf(c, wo, wi)
-
-    @wp.func
-    def flagged_sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
-        c = b
-        c.flags = b.flags | flag
-        return sss.sample(c, wo, u)
-
-    return flagged_eval, flagged_sample
-
-
-LOBES = {"exit": _with_flag(sss.EXIT), "surface": _with_flag(sss.SURFACE)}
 
 
 @pytest.mark.parametrize("lobe", ["exit", "surface"])

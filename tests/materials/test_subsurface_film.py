@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import warp as wp
 
 import renderer
 from bsdf_harness import bsdf_moments
@@ -17,11 +16,10 @@ from renderer import optics
 from renderer.api import init_warp
 from renderer.color import spectral
 from renderer.materials import material
-from renderer.materials import subsurface as sss
 from renderer.materials.beam_diffusion import fresnel_dielectric
-from renderer.materials.bsdf import BSDF, BSDFEval, BSDFSample
 from renderer.materials.subsurface import exit_normalisation_host
 from scenes_py import single_object_scene
+from subsurface_lobes import LOBES as SUBSURFACE_LOBES
 
 init_warp()
 ETA = 1.33
@@ -53,23 +51,7 @@ def balance(film: dict, rho_eff: np.ndarray) -> np.ndarray:
     return (1 - a * (1 - t_bare)) / (1 - a * (1 - t_coat))
 
 
-def _flagged(flag: int) -> tuple[wp.Function, wp.Function]:
-    @wp.func
-    def flagged_eval(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
-        c = b
-        c.flags = b.flags | flag
-        return sss.eval_pdf(c, wo, wi)
-
-    @wp.func
-    def flagged_sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
-        c = b
-        c.flags = b.flags | flag
-        return sss.sample(c, wo, u)
-
-    return flagged_eval, flagged_sample
-
-
-LOBES = {"exit": _flagged(sss.EXIT), "surface": _flagged(sss.SURFACE), "whole": None}
+LOBES = {**SUBSURFACE_LOBES, "whole": None}
 
 
 @pytest.mark.parametrize("lobe", ["exit", "surface", "whole"])
