@@ -32,19 +32,20 @@ def load_scene(path: str | Path) -> SceneDescription:
 
 def open_session(scene: SceneDescription, settings: RenderSettings, device: str = "cpu", threads: int | None = None,
                  resume: str | Path | None = None, memory_limit_gb: float | None = None,
-                 wavefront: bool | None = None) -> RenderSession:
+                 wavefront: bool | None = None, aov: bool = False) -> RenderSession:
     """Upload ``scene`` and get a session ready to render passes; with ``resume``, continue the
     checkpoint at that path (refused if it was made from another scene or with other settings).
     A scene estimated to need more than ``memory_limit_gb`` (default: this machine's memory) is
     refused before anything is allocated. ``wavefront``: the wavefront integrator (True) or the
     megakernel (False) instead of the device's default (the wavefront on CUDA); the same image.
+    ``aov``: compile the AOV kernel with the others (``session.aovs()`` follows the passes).
     ``render`` and the ``render`` command both start here."""
     from renderer.device.scene import uses_media
     from renderer.integrators.kernels import use_wavefront
 
     limit = None if memory_limit_gb is None else int(memory_limit_gb * 2**30)
     check_fits(scene, settings.width, settings.height, limit, use_wavefront(device, wavefront, uses_media(scene)))
-    session = RenderSession(scene, settings, device=device, threads=threads, wavefront=wavefront)
+    session = RenderSession(scene, settings, device=device, threads=threads, wavefront=wavefront, aov=aov)
     if resume is not None:
         session.restore(load_checkpoint(resume), source=str(resume))
     return session

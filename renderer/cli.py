@@ -343,7 +343,8 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
                                device=args.device, threads=args.threads, resume=args.resume)
     else:
         session = open_session(scene, settings, device=args.device, threads=args.threads, resume=args.resume,
-                               memory_limit_gb=args.memory_limit, wavefront=args.wavefront)
+                               memory_limit_gb=args.memory_limit, wavefront=args.wavefront,
+                               aov=bool(args.aov or args.denoise))
     phases["Upload (Warp start, geometry, textures, lights)"] = time.perf_counter() - clock0 - sum(phases.values()) \
         - session.stats.compile_seconds
     phases["Kernel load"] = session.stats.compile_seconds
@@ -398,10 +399,8 @@ def _run(args: argparse.Namespace, stop: _StopSignals) -> int:
     img = session.image()
     layers: dict = {}
     if args.aov or args.denoise:
-        from renderer.integrators.aov import render_aovs
-
-        local = session if args.ray is None else open_session(scene, settings, args.device, args.threads)
-        aovs = render_aovs(local.ds, local.settings.seed)
+        local = session if args.ray is None else open_session(scene, settings, args.device, args.threads, aov=True)
+        aovs = local.aovs()
         layers = {k: aovs[k] for k in args.aov}
         if args.denoise:
             from renderer.io.denoise import denoise

@@ -81,10 +81,11 @@ def row_chunks(height: int, threads: int) -> list[tuple[int, int]]:
 class RenderSession:
     """Upload once, then render passes on demand (``run``); ``state``/``restore`` checkpoint it.
     ``wavefront`` chooses the integrator (default: the wavefront on CUDA, the megakernel on the
-    CPU); both give the same image, so it is not a setting a checkpoint records."""
+    CPU); both give the same image, so it is not a setting a checkpoint records. ``aov``: the AOV
+    kernel is compiled with the others, side by side, for :meth:`aovs` after the passes."""
 
     def __init__(self, scene: SceneDescription, settings: RenderSettings, device: str = "cpu",
-                 threads: int | None = None, wavefront: bool | None = None):
+                 threads: int | None = None, wavefront: bool | None = None, aov: bool = False):
         import warp as wp
 
         from renderer.device.runtime import require_device
@@ -105,7 +106,7 @@ class RenderSession:
         self.sampler = upload_sampler(settings.sampler, W, H, device)
         independent = settings.sampler.name == "independent"
         self.wavefront = use_wavefront(device, wavefront, self.ds.features.media)   # the same image either way
-        kernels = render_kernels(self.ds.features, independent, wavefront=self.wavefront)
+        kernels = render_kernels(self.ds.features, independent, aov, wavefront=self.wavefront)
         self.kernel = kernels.get("path")
         t0 = time.perf_counter()
         # one module per kernel, compiled side by side (Warp's codegen is locked, its compilers
@@ -205,6 +206,13 @@ class RenderSession:
         from renderer.sensor import sensor_output
 
         return sensor_output(self.film.image(), self.scene.film, self.scene.camera)
+
+    def aovs(self, n_samples: int = 16) -> dict[str, np.ndarray]:
+        """The denoiser's guides and the id AOVs (:func:`renderer.integrators.aov.render_aovs`),
+        launched over the passes' row chunks and threads."""
+        from renderer.integrators.aov import render_aovs
+
+        return render_aovs(self.ds, self.settings.seed, n_samples, self.chunks, self.threads)
 
     # ---- checkpoints ----------------------------------------------------------------------
 

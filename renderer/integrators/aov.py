@@ -12,6 +12,8 @@ throughput weight of its own BSDF samples, so every material (present or future)
 without extra code; specular-only surfaces report their Fresnel-weighted reflectance."""
 from __future__ import annotations
 
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from functools import lru_cache
 
 import numpy as np
@@ -42,11 +44,11 @@ def aov_kernel(features: Features) -> wp.Kernel:
     mixes = features.mix
 
     @wp.kernel(module="unique", module_options=KERNEL_OPTIONS)
-    def first_hit(scene: Scene, seed: int, n_samples: int, albedo: wp.array(dtype=wp.vec3),
+    def first_hit(scene: Scene, seed: int, n_samples: int, row_offset: int, albedo: wp.array(dtype=wp.vec3),
                   normal: wp.array(dtype=wp.vec3), depth: wp.array(dtype=float), material: wp.array(dtype=float),
                   instance: wp.array(dtype=float)):
-        pixel = wp.tid()
         width = scene.cam.width
+        pixel = row_offset * width + wp.tid()
         px = pixel % width
         py = pixel // width
         centre = generate_ray(scene.cam, float(px) + 0.5, float(py) + 0.5, wp.vec2(0.5, 0.5))
@@ -97,16 +99,25 @@ def aov_kernel(features: Features) -> wp.Kernel:
     return first_hit
 
 
-def render_aovs(ds: DeviceScene, seed: int, n_samples: int = 16) -> dict[str, np.ndarray]:
+def render_aovs(ds: DeviceScene, seed: int, n_samples: int = 16,
+                chunks: Sequence[tuple[int, int]] = (), threads: int = 1) -> dict[str, np.ndarray]:
     """Albedo (H, W, 3) in [0, 1] (box-filtered over ``n_samples``, 0 for the background), unit
     shading normal (H, W, 3) and camera-space depth (H, W, 1) averaged over the samples that hit
     (both 0 where nothing is hit), and the material and instance ids (H, W, 1) at pixel centres
-    (-1: nothing), exact as float32 up to 2^24."""
+    (-1: nothing), exact as float32 up to 2^24. ``chunks`` (first row, rows) are launched from
+    ``threads`` threads, as the render's passes are (the CPU device runs a launch on one core); each
+    pixel's numbers depend on the pixel alone, so the AOVs are the same however the rows are cut."""
     W, H, dev = ds.width, ds.height, ds.device
     out = {"albedo": wp.zeros(W * H, dtype=wp.vec3, device=dev), "normal": wp.zeros(W * H, dtype=wp.vec3, device=dev),
            "depth": wp.zeros(W * H, dtype=float, device=dev), "material": wp.zeros(W * H, dtype=float, device=dev),
            "instance": wp.zeros(W * H, dtype=float, device=dev)}
-    wp.launch(aov_kernel(ds.features), dim=W * H,
-              inputs=[ds.struct, seed, n_samples, *out.values()],
-              device=dev)
+    kernel = aov_kernel(ds.features)
+
+    def launch(chunk: tuple[int, int]) -> None:
+        first, rows = chunk
+        wp.launch(kernel, dim=rows * W, inputs=[ds.struct, seed, n_samples, first, *out.values()], device=dev)
+        wp.synchronize_device(dev)
+
+    with ThreadPoolExecutor(max_workers=max(1, threads)) as pool:
+        list(pool.map(launch, chunks or [(0, H)]))
     return {k: v.numpy().reshape(H, W, -1) for k, v in out.items()}

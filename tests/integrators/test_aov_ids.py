@@ -41,3 +41,19 @@ def test_material_and_instance_ids_label_each_region(tmp_path):
     assert set(np.unique(inst)) == {-1.0, 0.0, 1.0}
     assert np.array_equal(mat == -1, inst == -1)                      # one background, two labels
     assert np.all(mat == np.round(mat)) and np.all(inst == np.round(inst))
+
+
+def test_aovs_cut_into_row_chunks_over_threads_equal_one_launch(tmp_path):
+    """The session launches the AOVs over its passes' row chunks from several threads; every
+    pixel's numbers are its own, so the layers equal one launch over the whole film bit for bit."""
+    path = tmp_path / "ids.pbrt"
+    path.write_text(SCENE)
+    desc = load_scene(path)
+    settings = settings_for(desc)
+    session = open_session(desc, settings, threads=2, aov=True)
+    assert len(session.chunks) > 2
+    whole = render_aovs(session.ds, settings.seed, 4)
+    chunked = session.aovs(4)
+    for name, layer in whole.items():
+        assert np.array_equal(layer, chunked[name]), name
+    assert whole["albedo"].max() > 0.1
