@@ -179,3 +179,25 @@ def test_instance_transform_file(tmp_path):
 ])
 def test_object_errors_are_located(tmp_path, body, line, match):
     error_at(tmp_path, HEAD + body, line, match)
+
+
+@pytest.mark.parametrize("polygons", [[[0, 1, 2], [0, 2, 3]], [[0, 1, 2, 3], [1, 4, 2]]], ids=["triangles", "quad"])
+def test_binary_ply_reads_as_the_same_mesh_memory_mapped_or_face_by_face(tmp_path, polygons):
+    """Binary triangle meshes are memory-mapped whole; a mesh with any other polygon is read face by
+    face and fanned. Both give the triangles of the same polygons, in the file's order."""
+    import plyfile
+
+    from renderer.scene import plymesh
+
+    vertex = np.array([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (2, 1, 0)],
+                      dtype=[("x", "f4"), ("y", "f4"), ("z", "f4")])
+    face = np.empty(len(polygons), dtype=[("vertex_indices", "O")])
+    face["vertex_indices"] = [np.array(p, dtype=np.int32) for p in polygons]
+    path = tmp_path / "mesh.ply"
+    plyfile.PlyData([plyfile.PlyElement.describe(vertex, "vertex"), plyfile.PlyElement.describe(face, "face")]).write(path)
+    mapped = plymesh._read_triangles(path)
+    assert (mapped is not None) == all(len(p) == 3 for p in polygons)
+    mesh = plymesh.read_ply(path, Location(str(path), 1))
+    fanned = [[p[0], p[i], p[i + 1]] for p in polygons for i in range(1, len(p) - 1)]
+    assert mesh.indices.tolist() == fanned
+    assert np.array_equal(mesh.positions, np.stack([vertex[k] for k in "xyz"], -1))
