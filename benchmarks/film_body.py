@@ -45,17 +45,18 @@ SKY = 'LightSource "infinite" "rgb L" [1 1 1]'
 SUN = 'LightSource "distant" "point3 from" [1 1.4142 -1] "point3 to" [0 0 0] "rgb L" [3 3 3] "float angularradius" [5]'
 
 
-def disney_body() -> str:
-    """The ``disney`` parameters of the same body: its effective albedo and mean free path."""
+def disney_body(color: list[float] | None = None) -> str:
+    """The ``disney`` parameters of the same body: its effective albedo (or ``color``) and mean free path."""
     from renderer.materials.beam_diffusion import profile_table
     st = np.add(SIGMA_A, SIGMA_S)
     table = profile_table(0.0, ETA)
-    albedo = np.interp(np.divide(SIGMA_S, st), table.rho, table.rho_eff)
+    albedo = np.interp(np.divide(SIGMA_S, st), table.rho, table.rho_eff) if color is None else np.asarray(color)
     return (f'"rgb color" [{" ".join(f"{x:.4f}" for x in albedo)}] "rgb scatterdistance" '
             f'[{" ".join(f"{x:.5f}" for x in 1.0 / st)}] "float eta" [{ETA}] "float roughness" [{0.2 ** 0.25:.4f}]')
 
 
-def scene_text(shape: str, light: str, body: str, film: bool, res: int, depth: int) -> str:
+def scene_text(shape: str, light: str, body: str, film: bool, res: int, depth: int,
+               color: list[float] | None = None) -> str:
     """``body``: "diffusion" (the subsurface material), "disney" (its subsurface body) or "volume" (a
     closed boundary around a medium)."""
     cam = SPHERE_CAM if shape == "sphere" else SLAB_CAM
@@ -65,7 +66,7 @@ def scene_text(shape: str, light: str, body: str, film: bool, res: int, depth: i
             f'{SKY if light == "sky" else SUN}\n')
     coeffs = f'"rgb sigma_a" [{" ".join(map(str, SIGMA_A))}] "rgb sigma_s" [{" ".join(map(str, SIGMA_S))}]'
     if body == "disney":
-        return head + f'Material "disney" {disney_body()} {FILM if film else ""}\n{geometry}\n'
+        return head + f'Material "disney" {disney_body(color)} {FILM if film else ""}\n{geometry}\n'
     if body == "diffusion":
         return head + (f'Material "subsurface" {coeffs} "float eta" [{ETA}] {ROUGH} {FILM if film else ""}\n'
                        f'{geometry}\n')
@@ -130,6 +131,9 @@ def main() -> None:
     ap.add_argument("--table", type=Path, default=None, help="print the tables of a results.json and stop")
     ap.add_argument("--model", choices=("subsurface", "disney"), default="subsurface", help="the diffusion model")
     ap.add_argument("--volume-from", type=Path, default=None, help="the reference's means from this results.json")
+    ap.add_argument("--disney-color", type=float, nargs=3, default=None, help="the disney body's colour (default: "
+                    "the medium's effective albedo)")
+    ap.add_argument("--suffix", default="", help="added to the output files' names")
     args = ap.parse_args()
     if args.table:
         print(tables(json.loads(args.table.read_text())))
@@ -147,8 +151,8 @@ def main() -> None:
                 key = f"{shape}/{light}/{'film' if film else 'bare'}"
                 model = "diffusion" if args.model == "subsurface" else "disney"
                 for body in (model, "volume") if args.volume_from is None else (model,):
-                    imgs[body], secs = render(scene_text(shape, light, body, film, args.res, args.depth), args.spp,
-                                              seed=7)
+                    imgs[body], secs = render(scene_text(shape, light, body, film, args.res, args.depth,
+                                                         args.disney_color), args.spp, seed=7)
                     print(f"{key}/{body}: {secs:.1f} s", flush=True)
                 scale = 1.0 if light == "sky" else 3.0
                 if args.volume_from is None:
@@ -156,16 +160,17 @@ def main() -> None:
                     strip += [imgs["volume"], imgs[model]]
                 else:
                     ref = json.loads(args.volume_from.read_text())[key]
-                    results[key] = compare_means(imgs[model][m].mean(0), np.array(ref["volume"]), ref["volume_se"], scale)
+                    results[key] = compare_means(imgs[model][m].mean(0), np.array(ref["volume"]), ref["volume_se"],
+                                                 scale)
                     strip += [imgs[model]]
                 print(key, json.dumps(results[key]), flush=True)
             if args.out:
                 args.out.mkdir(parents=True, exist_ok=True)
-                prefix = "film_body" if args.model == "subsurface" else f"film_body_{args.model}"
+                prefix = "film_body" if args.model == "subsurface" else f"film_body_{args.model}{args.suffix}"
                 write_png(args.out / f"{prefix}_{shape}_{light}.png", np.concatenate(strip, axis=1))
     if args.out:
-        name = "film_body_results.json" if args.model == "subsurface" else f"film_body_{args.model}_results.json"
-        (args.out / name).write_text(json.dumps(results, indent=1))
+        model = "" if args.model == "subsurface" else f"_{args.model}"
+        (args.out / f"film_body{model}{args.suffix}_results.json").write_text(json.dumps(results, indent=1))
     print(tables(results))
 
 
