@@ -69,8 +69,7 @@ SLOT = PARAMS.slots
 FLAG = PARAMS.flags
 #: Set by the subsurface step where light leaves the object: only the exit lobe.
 EXIT = wp.constant(FIRST_DERIVED_FLAG)
-#: A film or stack coats the subsurface body (:mod:`.disney_film`).
-FILM = wp.constant(FIRST_DERIVED_FLAG << 1)
+FILM = wp.constant(FIRST_DERIVED_FLAG << 1)     # a film or stack coats the subsurface body (.disney_film)
 #: Lower bound of the GGX alphas (pbrt-v3): roughness 0 is a very sharp lobe, never a delta.
 ALPHA_MIN = wp.constant(1.0e-3)
 #: Burley's clearcoat masking uses GGX with this fixed alpha.

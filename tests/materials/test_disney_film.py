@@ -132,7 +132,8 @@ def test_flat_coated_body_under_white_sky(tmp_path, film):
     integrates to the base colour A on a plane: L = R(0°) + (T/(1 − F))(0°) k A E_exit, with
     E_exit the coated exit lobe's albedo and k the exit balance."""
     colour = np.array([0.9, 0.5, 0.2])
-    params = f'"rgb color" [{colour[0]} {colour[1]} {colour[2]}] "float roughness" [0] "rgb scatterdistance" [0.2 0.1 0.05] '
+    params = (f'"rgb color" [{colour[0]} {colour[1]} {colour[2]}] "float roughness" [0] '
+              '"rgb scatterdistance" [0.2 0.1 0.05] ')
     (tmp_path / "flat.pbrt").write_text(FLAT.format(params=params + _film_text(film)))
     img = renderer.render(renderer.load_scene(tmp_path / "flat.pbrt"), spp=1024, seed=3,
                           thin_film="rgb3").reshape(-1, 3)
