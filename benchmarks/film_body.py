@@ -5,6 +5,12 @@ sigma_a, sigma_s and g under volpath. The same comparison without the film (``di
 the medium against the bare ``subsurface``) separates the diffusion approximation's own error
 from what coupling the film adds.
 
+``--model disney``: the diffusion body is the ``disney`` material with the film over its subsurface
+body (renderer.materials.disney_film) instead: colour = the medium's effective albedo (pbrt-v4's
+table at sigma_s / sigma_t, this eta), scatterdistance = 1 / sigma_t, eta the same, roughness
+0.2^(1/4) (Disney's alpha = roughness², the others' alpha = sqrt(0.2)); ``--volume-from`` takes the
+reference's means from an earlier results file of the same resolution, spp and seed.
+
 Shapes: a sphere and a slab (a box 6 x 6 x 1 seen from above), under a uniform sky and under a
 soft sun (a distant light of 5° angular radius at 45° elevation). Boundaries are rough
 (roughness 0.2, no multiple-scattering compensation on either side), so the sun reaches the
@@ -39,14 +45,28 @@ SKY = 'LightSource "infinite" "rgb L" [1 1 1]'
 SUN = 'LightSource "distant" "point3 from" [1 1.4142 -1] "point3 to" [0 0 0] "rgb L" [3 3 3] "float angularradius" [5]'
 
 
-def scene_text(shape: str, light: str, body: str, film: bool, res: int, depth: int) -> str:
-    """``body``: "diffusion" (the subsurface material) or "volume" (a closed boundary around a medium)."""
+def disney_body(color: list[float] | None = None) -> str:
+    """The ``disney`` parameters of the same body: its effective albedo (or ``color``) and mean free path."""
+    from renderer.materials.beam_diffusion import profile_table
+    st = np.add(SIGMA_A, SIGMA_S)
+    table = profile_table(0.0, ETA)
+    albedo = np.interp(np.divide(SIGMA_S, st), table.rho, table.rho_eff) if color is None else np.asarray(color)
+    return (f'"rgb color" [{" ".join(f"{x:.4f}" for x in albedo)}] "rgb scatterdistance" '
+            f'[{" ".join(f"{x:.5f}" for x in 1.0 / st)}] "float eta" [{ETA}] "float roughness" [{0.2 ** 0.25:.4f}]')
+
+
+def scene_text(shape: str, light: str, body: str, film: bool, res: int, depth: int,
+               color: list[float] | None = None) -> str:
+    """``body``: "diffusion" (the subsurface material), "disney" (its subsurface body) or "volume" (a
+    closed boundary around a medium)."""
     cam = SPHERE_CAM if shape == "sphere" else SLAB_CAM
     geometry = SPHERE if shape == "sphere" else SLAB
     head = (f'{cam}\nFilm "rgb" "integer xresolution" [{res}] "integer yresolution" [{res}] "string filename" "x.exr"\n'
             f'Sampler "independent"\nIntegrator "volpath" "integer maxdepth" [{depth}]\nWorldBegin\n'
             f'{SKY if light == "sky" else SUN}\n')
     coeffs = f'"rgb sigma_a" [{" ".join(map(str, SIGMA_A))}] "rgb sigma_s" [{" ".join(map(str, SIGMA_S))}]'
+    if body == "disney":
+        return head + f'Material "disney" {disney_body(color)} {FILM if film else ""}\n{geometry}\n'
     if body == "diffusion":
         return head + (f'Material "subsurface" {coeffs} "float eta" [{ETA}] {ROUGH} {FILM if film else ""}\n'
                        f'{geometry}\n')
@@ -87,9 +107,13 @@ def lab(rgb: np.ndarray) -> np.ndarray:
 
 def compare(diffusion: np.ndarray, volume: np.ndarray, m: np.ndarray, scale: float) -> dict:
     """Means over the mask, their relative difference per channel, hues and ΔE00 (colours over ``scale``)."""
+    return compare_means(diffusion[m].mean(0), volume[m].mean(0), volume[m].std(0) / np.sqrt(m.sum()), scale)
+
+
+def compare_means(a: np.ndarray, b: np.ndarray, se, scale: float) -> dict:
+    """The comparison of the diffusion model's means ``a`` with the reference's ``b`` (standard error ``se``)."""
     import colour
-    a, b = diffusion[m].mean(0), volume[m].mean(0)
-    se = volume[m].std(0) / np.sqrt(m.sum())
+    se = np.asarray(se)
     la, lb = lab(a / scale), lab(b / scale)
     hue = lambda l: float(np.degrees(np.arctan2(l[2], l[1])) % 360)
     return {"diffusion": a.round(4).tolist(), "volume": b.round(4).tolist(), "volume_se": se.round(4).tolist(),
@@ -105,6 +129,11 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=None, help="folder for the PNG strips and results.json")
     ap.add_argument("--only", default="", help="e.g. sphere/sky: one configuration")
     ap.add_argument("--table", type=Path, default=None, help="print the tables of a results.json and stop")
+    ap.add_argument("--model", choices=("subsurface", "disney"), default="subsurface", help="the diffusion model")
+    ap.add_argument("--volume-from", type=Path, default=None, help="the reference's means from this results.json")
+    ap.add_argument("--disney-color", type=float, nargs=3, default=None, help="the disney body's colour (default: "
+                    "the medium's effective albedo)")
+    ap.add_argument("--suffix", default="", help="added to the output files' names")
     args = ap.parse_args()
     if args.table:
         print(tables(json.loads(args.table.read_text())))
@@ -119,19 +148,29 @@ def main() -> None:
             strip = []
             for film in (False, True):
                 imgs = {}
-                for body in ("diffusion", "volume"):
-                    imgs[body], secs = render(scene_text(shape, light, body, film, args.res, args.depth), args.spp,
-                                              seed=7)
-                    print(f"{shape}/{light}/{'film' if film else 'bare'}/{body}: {secs:.1f} s", flush=True)
                 key = f"{shape}/{light}/{'film' if film else 'bare'}"
-                results[key] = compare(imgs["diffusion"], imgs["volume"], m, 1.0 if light == "sky" else 3.0)
+                model = "diffusion" if args.model == "subsurface" else "disney"
+                for body in (model, "volume") if args.volume_from is None else (model,):
+                    imgs[body], secs = render(scene_text(shape, light, body, film, args.res, args.depth,
+                                                         args.disney_color), args.spp, seed=7)
+                    print(f"{key}/{body}: {secs:.1f} s", flush=True)
+                scale = 1.0 if light == "sky" else 3.0
+                if args.volume_from is None:
+                    results[key] = compare(imgs[model], imgs["volume"], m, scale)
+                    strip += [imgs["volume"], imgs[model]]
+                else:
+                    ref = json.loads(args.volume_from.read_text())[key]
+                    results[key] = compare_means(imgs[model][m].mean(0), np.array(ref["volume"]), ref["volume_se"],
+                                                 scale)
+                    strip += [imgs[model]]
                 print(key, json.dumps(results[key]), flush=True)
-                strip += [imgs["volume"], imgs["diffusion"]]
             if args.out:
                 args.out.mkdir(parents=True, exist_ok=True)
-                write_png(args.out / f"film_body_{shape}_{light}.png", np.concatenate(strip, axis=1))
+                prefix = "film_body" if args.model == "subsurface" else f"film_body_{args.model}{args.suffix}"
+                write_png(args.out / f"{prefix}_{shape}_{light}.png", np.concatenate(strip, axis=1))
     if args.out:
-        (args.out / "film_body_results.json").write_text(json.dumps(results, indent=1))
+        model = "" if args.model == "subsurface" else f"_{args.model}"
+        (args.out / f"film_body{model}{args.suffix}_results.json").write_text(json.dumps(results, indent=1))
     print(tables(results))
 
 

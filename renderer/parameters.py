@@ -148,14 +148,23 @@ class Parameter:
 class Parameters:
     """A plugin's declared parameters, in declaration order (which is also the slot order)."""
 
-    def __init__(self, *params: Parameter):
+    def __init__(self, *params: Parameter, shared: dict[str, str] | None = None):
+        """``shared`` maps a parameter to the one whose slot it takes: two parameters of modes that
+        exclude each other (a thin sheet's and a coated solid's) sharing a slot; the sharer fills it
+        where the material's resolved values hold it (:meth:`slot_layout`)."""
         self.by_name = {p.name: p for p in params}
         if len(self.by_name) != len(params):
             raise ValueError("a parameter is declared twice")
-        slotted = [p.name for p in params if p.type in ("float", "rgb")]
+        self.shared = dict(shared or {})
+        slotted = [p.name for p in params if p.type in ("float", "rgb") and p.name not in self.shared]
         flagged = [p.name for p in params if p.type == "bool"]
+        index = {n: i for i, n in enumerate(slotted)}
+        for sharer, owner in self.shared.items():
+            if self.by_name[sharer].type not in ("float", "rgb") or owner not in index:
+                raise ValueError(f"parameter {sharer!r} cannot share the slot of {owner!r}")
+            index[sharer] = index[owner]
         #: slot index per float/rgb parameter, as class attributes Warp can read in device code
-        self.slots = type("Slots", (), {n: i for i, n in enumerate(slotted)})
+        self.slots = type("Slots", (), index)
         #: bit per bool parameter
         self.flags = type("Flags", (), {n: 1 << i for i, n in enumerate(flagged)})
         self.slot_names = tuple(slotted)
@@ -186,6 +195,16 @@ class Parameters:
         """A parameter's given value, else its declared default."""
         v = values.get(name)
         return self.by_name[name].default if v is None else v
+
+    def slot_layout(self, values: dict[str, Any]) -> list[tuple[Parameter, Any]]:
+        """Per slot its parameter and value (given or default): a shared slot's sharer where
+        ``values`` holds it, else its owner."""
+        out = []
+        for name in self.slot_names:
+            sharers = [s for s, o in self.shared.items() if o == name and s in values]
+            chosen = sharers[0] if sharers else name
+            out.append((self.by_name[chosen], self.value(values, chosen)))
+        return out
 
     def docs_table(self) -> str:
         """A Markdown table of the parameters (for README and docs)."""

@@ -61,6 +61,7 @@ class Features:
     layered: bool = True        # some thinfilm takes the layered random walk (coated* always do)
     smooth: tuple[str, ...] = ()    # types whose every material is smooth: no GGX lobes compiled for them
     coated_body: bool = True    # some subsurface material has a film on its boundary (renderer.materials.film_body)
+    coated_disney: bool = True  # some disney material has a film over its subsurface body (.disney_film)
 
 
 @dataclass
@@ -138,7 +139,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     # the subsurface material's spectral bodies weigh their wavelengths with the same table
     spectral_sss = bool(np.any((mats.flags.numpy() & subsurface.SPECTRAL) != 0))
     lobes = lobe_features(desc.materials)
-    films = thinfilm.NAME in used or lobes["coated_body"]    # films integrated over the wavelength
+    films = thinfilm.NAME in used or lobes["coated_body"] or lobes["coated_disney"]    # films integrated over the wavelength
     S.spectral, S.spectral_n = _spectral_table(films, dispersion or spectral_sss, thin_film, device)
     media_up = upload_media(desc.media if media else [], device)
     S.media = media_up.struct

@@ -1,7 +1,7 @@
 """pbrt-v4's ``subsurface`` material's step (its tabulated photon-beam-diffusion BSSRDF, exit points
 on the same material, as pbrt-v4 matches them) on the probe machinery of
 :mod:`renderer.integrators.subsurface`, and ``subsurface_step(features)``, which compiles only the
-steps of the subsurface materials a scene uses (Disney's and this one).
+steps of the subsurface materials a scene uses (Disney's, with a film where one has it, and this one).
 
 A film or stack on the boundary (:mod:`renderer.materials.film_body`) changes where light enters
 (its T and R in place of 1 − F and F) and how the exit lobe is weighted; it is compiled in only
@@ -18,10 +18,11 @@ from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import Surface, surface_at
 from renderer.integrators.subsurface import (P_NORMAL, SUBSURFACE, SubsurfaceStep, _identity, probe_axes,
                                              probe_chord, subsurface_scatter)
-from renderer.materials import dielectric
+from renderer.materials import dielectric, disney
 from renderer.materials import subsurface as pbrt_subsurface
 from renderer.materials.beam_diffusion import N_ROWS
 from renderer.materials.bsdf import BSDF
+from renderer.materials.disney_film import entry_factor
 from renderer.materials.film_body import entry_share, entry_weight, exit_balance
 from renderer.materials.tabulated_bssrdf import (albedo_from_reflectance, effective_albedo, probe_radius, profile,
                                                  sample_radius)
@@ -288,6 +289,17 @@ def tabulated_scatter(coated: bool) -> wp.Function:
     return scatter
 
 
+@wp.func
+def disney_film_scatter(scene: Scene, b: BSDF, s: Surface, inst: int, wo: wp.vec3, seed: int) -> SubsurfaceStep:
+    """Disney's step, the route through the body weighted by a film's entry factor
+    (:func:`renderer.materials.disney_film.entry_factor`: 1 without a film)."""
+    ev = subsurface_scatter(scene, b, s, inst, wo, seed)
+    if (ev.b.flags & disney.EXIT) != 0 and (b.flags & disney.FILM) != 0:
+        side = wp.where(wp.dot(wo, s.ng) < 0.0, -1.0, 1.0)
+        ev.weight = wp.cw_mul(ev.weight, entry_factor(b, wp.dot(wo, s.ns) * side))
+    return ev
+
+
 @lru_cache(maxsize=None)
 def subsurface_step(features: Features) -> wp.Function:
     """``step(scene, b, s, inst, wo, seed) -> SubsurfaceStep`` with the steps of exactly the
@@ -295,12 +307,15 @@ def subsurface_step(features: Features) -> wp.Function:
     disney_on = features.subsurface and "disney" in features.materials
     tabulated_on = features.subsurface and pbrt_subsurface.NAME in features.materials
     coated = features.coated_body
+    disney_coated = disney_on and features.coated_disney
 
     @wp.func
     def step(scene: Scene, b: BSDF, s: Surface, inst: int, wo: wp.vec3, seed: int) -> SubsurfaceStep:
         if wp.static(tabulated_on):
             if b.kind == SUBSURFACE:
                 return wp.static(tabulated_scatter(coated))(scene, b, s, inst, wo, seed)
+        if wp.static(disney_coated):
+            return disney_film_scatter(scene, b, s, inst, wo, seed)
         if wp.static(disney_on):
             return subsurface_scatter(scene, b, s, inst, wo, seed)
         return _identity(b, s, wo)

@@ -23,7 +23,8 @@ import warp as wp
 
 from renderer.errors import Location, SceneError, UnsupportedError
 from renderer.materials import (coatedconductor, coateddiffuse, conductor, dielectric, diffuse, diffusetransmission, disney,
-                                energy, selection, subsurface, thindielectric, thinfilm)
+                                disney_film, energy, selection, subsurface, thindielectric, thinfilm)
+from renderer.materials.film_body import has_film
 from renderer.materials.bsdf import FIRST_DERIVED_FLAG, MAX_SLOTS
 from renderer.parameters import Parameter, Parameters, TextureRef
 from renderer.scene.description import MaterialDesc, SceneDescription, TextureDesc
@@ -152,7 +153,7 @@ def device_layout(desc: MaterialDesc) -> tuple[list[tuple[Parameter, Any]], int]
     for name in params.flag_names:
         if params.value(values, name):
             flags |= getattr(params.flags, name)
-    return [(params.by_name[n], params.value(values, n)) for n in params.slot_names], flags
+    return params.slot_layout(values), flags
 
 
 #: The parameter that turns on energy compensation (renderer.materials.energy) where a material has it.
@@ -200,12 +201,17 @@ def lobe_features(descs: list[MaterialDesc]) -> dict[str, Any]:
     """The fields of :class:`renderer.device.scene.Features` that say which lobes a scene of these
     materials can reach: ``multiscatter`` (some material that may be rough counts the bounces
     between microfacets), ``layered`` (some thinfilm takes the layered walk; coateddiffuse and
-    coatedconductor always do), ``smooth`` (:func:`smooth_kinds`) and ``coated_body`` (some
-    subsurface material has a film on its boundary)."""
+    coatedconductor always do), ``smooth`` (:func:`smooth_kinds`), ``coated_body`` (some
+    subsurface material has a film on its boundary) and ``coated_disney`` (some disney material has one)."""
     return {"multiscatter": any(multiscatters(d) and may_be_rough(d) for d in descs),
             "layered": any(d.kind == thinfilm.NAME and thinfilm.walks(d.values) for d in descs),
             "smooth": smooth_kinds(descs),
-            "coated_body": any(d.kind == subsurface.NAME and subsurface.has_coating(d.values) for d in descs)}
+            "coated_body": any(d.kind == subsurface.NAME and subsurface.has_coating(d.values) for d in descs),
+            "coated_disney": any(d.kind == disney.NAME and has_film(d.values) for d in descs)}
+
+
+#: Specialisers kept outside their material's module (the film lobes import the material).
+SPECIALISED = {disney.NAME: disney_film.specialised}
 
 
 def hooks(module: ModuleType, features: Any) -> tuple[wp.Function, wp.Function]:
@@ -214,7 +220,7 @@ def hooks(module: ModuleType, features: Any) -> tuple[wp.Function, wp.Function]:
     reach: the module's ``specialised(features)`` where it has one; its ``SMOOTH_LOBES`` where
     every material of its type is smooth, its ``SINGLE_LOBES`` where none counts the bounces
     between microfacets; else the functions that handle every case."""
-    specialised = getattr(module, "specialised", None)
+    specialised = SPECIALISED.get(module.NAME, getattr(module, "specialised", None))
     if specialised is not None:
         return specialised(features)
     if module.NAME in features.smooth and hasattr(module, "SMOOTH_LOBES"):

@@ -19,24 +19,28 @@ Solid (non-thin) surfaces bound an object: hit from the inside only the dielectr
 Thin sheets are two-sided. With a non-zero ``scatterdistance`` on a solid surface the diffuse base
 is not part of the BSDF: :mod:`renderer.subsurface` carries that light through the object instead,
 and marks the exit point (flag EXIT) where the BSDF becomes the exit lobe (1 − F_i/2)/π.
+An extension: a film or stack over that body, named as on ``subsurface`` (flag FILM, :mod:`.disney_film`).
 
-Sampling picks one lobe with probabilities from the lobe weights at wo; the density of
-``eval_pdf`` is the one-sample MIS mixture Σ p_lobe pdf_lobe and ``sample`` returns f|cos θi|/pdf
-with that mixture.
+Sampling picks one lobe by the lobe weights at wo; ``eval_pdf``'s density is the one-sample MIS
+mixture Σ p_lobe pdf_lobe and ``sample`` returns f|cos θi|/pdf with that mixture.
 """
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
 import warp as wp
 
+from renderer.errors import Location, SceneError
 from renderer.materials import dielectric
 from renderer.materials.bsdf import (BSDF, DIFFUSE, FIRST_DERIVED_FLAG, GLOSSY, REFLECTION, TRANSMISSION, BSDFEval,
                                      BSDFSample, failed_sample, sampled, signed_z)
+from renderer.materials.film_body import FILM_PARAMS, has_film, resolve_film
 from renderer.materials.microfacet import ggx_D, ggx_G, ggx_G1, ggx_sample_visible, ggx_visible_pdf, gtr1_D, gtr1_sample
 from renderer.optics.fresnel import fresnel_dielectric
 from renderer.parameters import Parameter, Parameters, TextureRef
+from renderer.materials.stack import stack_rows
 from renderer.sampling.warps import cosine_hemisphere
 from renderer.vecmath import INV_PI, luminance, max3
 
@@ -58,11 +62,14 @@ PARAMS = Parameters(
     Parameter("thin", "bool", False, doc="a two-sided thin sheet instead of a solid's boundary"),
     Parameter("flatness", "float", 0.0, 0.0, 1.0, texture=True, doc="thin sheets: the flattened diffuse share"),
     Parameter("difftrans", "float", 1.0, 0.0, 2.0, texture=True, doc="thin sheets: diffuse transmission"),
+    *(dataclasses.replace(p, default=None) if p.name == "thicknessmap" else p for p in FILM_PARAMS),
+    shared={"eta_film": "flatness", "thicknessscale": "difftrans"},
 )
 SLOT = PARAMS.slots
 FLAG = PARAMS.flags
 #: Set by the subsurface step where light leaves the object: only the exit lobe.
 EXIT = wp.constant(FIRST_DERIVED_FLAG)
+FILM = wp.constant(FIRST_DERIVED_FLAG << 1)     # a film or stack coats the subsurface body (.disney_film)
 #: Lower bound of the GGX alphas (pbrt-v3): roughness 0 is a very sharp lobe, never a delta.
 ALPHA_MIN = wp.constant(1.0e-3)
 #: Burley's clearcoat masking uses GGX with this fixed alpha.
@@ -78,6 +85,25 @@ def has_subsurface(values: dict[str, Any]) -> bool:
         return False
     v = values.get("scatterdistance")
     return isinstance(v, TextureRef) or (v is not None and bool(np.any(np.asarray(v) > 0.0)))
+
+
+def resolve(values: dict[str, Any], loc: Location | None) -> tuple[dict[str, Any], int]:
+    """A film coats a solid's subsurface body (else refused, as are the thin sheets' parameters whose
+    slots it takes); it claims those slots with its ``eta_film`` and ``thicknessscale``."""
+    owner = f'material "{NAME}"'
+    v = resolve_film(values, owner, loc)        # refuses a stack's parameters without its layers
+    if not has_film(values):
+        return values, 0
+    if not has_subsurface(values):
+        raise SceneError(f'{owner}: a film ("thickness", "thicknessmap" or "layer_eta") coats a subsurface body: '
+                         'it needs a solid ("thin" false) with a non-zero "scatterdistance"', loc)
+    if any(n in values for n in PARAMS.shared.values()):
+        raise SceneError(f'{owner}: flatness and difftrans (thin sheets) cannot be given with a film', loc)
+    return v | {n: PARAMS.value(v, n) for n in PARAMS.shared}, FILM
+
+
+def layer_rows(values: dict[str, Any], loc: Location | None) -> np.ndarray:
+    return stack_rows(values, loc, f'material "{NAME}"')     # a film's stack (no rows without one)
 
 
 @wp.struct
@@ -111,7 +137,7 @@ def _alphas(r: float, aspect: float) -> wp.vec2:
 
 
 @wp.func
-def _load(b: BSDF) -> Params:
+def load_params(b: BSDF) -> Params:
     P = Params()
     c = b.p[SLOT.color]
     c = wp.vec3(wp.clamp(c[0], 0.0, 1.0), wp.clamp(c[1], 0.0, 1.0), wp.clamp(c[2], 0.0, 1.0))
@@ -320,9 +346,9 @@ def _density(P: Params, p: vec5, o: wp.vec3, i: wp.vec3, glass: BSDFEval) -> flo
 
 
 @wp.func
-def _seen_from(b: BSDF, wo: wp.vec3) -> Params:
+def seen_from(b: BSDF, wo: wp.vec3) -> Params:
     """The parameters, with wo brought above the surface where the case is two-sided."""
-    P = _load(b)
+    P = load_params(b)
     P.sgn = _two_sided(P, wo)
     P.o = signed_z(wo, P.sgn)
     return P
@@ -330,7 +356,7 @@ def _seen_from(b: BSDF, wo: wp.vec3) -> Params:
 
 @wp.func
 def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
-    P = _seen_from(b, wo)
+    P = seen_from(b, wo)
     i = signed_z(wi, P.sgn)
     glass = BSDFEval()
     if P.gw > 0.0 and not P.thin and not P.exit:
@@ -348,7 +374,7 @@ def _reflect(o: wp.vec3, h: wp.vec3) -> wp.vec3:
 
 @wp.func
 def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
-    P = _seen_from(b, wo)
+    P = seen_from(b, wo)
     p = _probabilities(P, wo)
     o = P.o
     sgn = P.sgn
@@ -402,7 +428,7 @@ class SubsurfaceLobe:
 
 @wp.func
 def subsurface_lobe(b: BSDF, cos_o: float) -> SubsurfaceLobe:
-    P = _load(b)
+    P = load_params(b)
     s = SubsurfaceLobe()
     if not P.sss or P.exit or cos_o <= 0.0:
         return s

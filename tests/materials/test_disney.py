@@ -13,14 +13,16 @@ from renderer.api import init_warp
 from renderer.integrators.subsurface import diffusion_profile, profile_scale, sample_profile_radius
 from renderer.materials import disney, material
 from renderer.materials.bsdf import BSDF, Slots
+from renderer.materials.film_body import FILM_PARAMS
 from scenes_py import single_object_scene, sphere_mesh
 
 init_warp()
 
 
 def corner(x: float) -> dict:
-    """Every parameter at x (bools: x > 0), eta at 1.5 and no subsurface."""
-    v = {p.name: (x > 0) if p.type == "bool" else x for p in disney.PARAMS}
+    """Every parameter at x (bools: x > 0), eta at 1.5, no subsurface and no film (test_disney_film)."""
+    film = {p.name for p in FILM_PARAMS}
+    v = {p.name: (x > 0) if p.type == "bool" else x for p in disney.PARAMS if p.name not in film}
     return v | {"eta": 1.5, "scatterdistance": 0.0}
 
 
