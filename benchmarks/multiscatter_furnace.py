@@ -7,7 +7,9 @@ The error bar comes from the seeds, not from the pixels: a coated sphere's estim
 (the sampler picks reflection or refraction by the mean of R and T over the channels, so a channel
 whose R differs from the mean carries weights R_c / mean R, compounded over internal bounces; single
 paths of the stack weigh up to ~300 for a mean of 1), and one render's pixel spread then understates
-its error. Also printed: the same spheres by the scene-free chain of tests/materials/sphere_chain.py.
+its error (the stack at roughness 1 read (0.999, 0.987, 0.991) ± 0.003 over seeds 1-8 and
+(1.000, 1.000, 1.001) ± 0.003 over seeds 9-24: pass 24 seeds for that row). Also printed: the same
+spheres by the scene-free chain of tests/materials/sphere_chain.py.
 
     WARP_CACHE_PATH=.warp-cache .venv/bin/python benchmarks/multiscatter_furnace.py [spp] [seeds]
 """
