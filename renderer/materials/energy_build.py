@@ -79,6 +79,23 @@ def _albedo(mus: wp.array(dtype=float), alphas: wp.array(dtype=float), etas: wp.
     out[ie, ia, im] = wp.vec3(acc_r / n, acc_t / n, acc_t0 / n)
 
 
+@wp.func
+def facet_masking(wo: wp.vec3, wm: wp.vec3, alpha: wp.vec2, eta: float, g1: float) -> wp.vec2:
+    """G2(wo, wr)/G1(wo) and G2(wo, wt)/G1(wo) of facet wm's mirror and refracted directions (wo
+    above, relative index eta), 0 where that direction lands on the wrong side or refraction fails:
+    a visible facet's chance to send each out unshadowed."""
+    c = wp.dot(wo, wm)
+    out = wp.vec2(0.0)
+    wr = wm * (2.0 * c) - wo
+    if wr[2] > 0.0:
+        out[0] = ggx_G(wo, wr, alpha) / g1
+    t = refract(wo, wm, eta)
+    wt = wp.vec3(t[0], t[1], t[2])
+    if t[3] != 0.0 and wt[2] < 0.0:
+        out[1] = ggx_G(wo, wt, alpha) / g1
+    return out
+
+
 @wp.kernel
 def _facet_split(mus: wp.array(dtype=float), alphas: wp.array(dtype=float), etas: wp.array(dtype=float), strata: int,
                  seed: int, out: wp.array(dtype=FacetVector, ndim=3)):
@@ -97,15 +114,8 @@ def _facet_split(mus: wp.array(dtype=float), alphas: wp.array(dtype=float), etas
         u = wp.vec2((float(k % strata) + wp.randf(rng)) * inv, (float(k / strata) + wp.randf(rng)) * inv)
         wm = ggx_sample_visible(wo, alpha, u)
         c = wp.dot(wo, wm)
-        g = float(0.0)
-        wr = wm * (2.0 * c) - wo
-        if wr[2] > 0.0:
-            g = ggx_G(wo, wr, alpha) / g1
-        t = refract(wo, wm, eta)
-        wt = wp.vec3(t[0], t[1], t[2])
-        if t[3] != 0.0 and wt[2] < 0.0:
-            g -= ggx_G(wo, wt, alpha) / g1
-        g *= 1.0 - fresnel_dielectric(c, eta)
+        gs = facet_masking(wo, wm, alpha, eta, g1)
+        g = (gs[0] - gs[1]) * (1.0 - fresnel_dielectric(c, eta))
         x = wp.clamp(node_coordinate(c, eta), 0.0, 1.0) * float(N_FACET - 1)
         j = wp.min(int(x), N_FACET - 2)
         f = x - float(j)
