@@ -44,12 +44,13 @@ from renderer.sampling.samplers import PixelSample, SamplerParams
 LAYERED = wp.constant(thinfilm.FLAG.layered)
 
 
-#: The material kinds whose shading kernels, in scenes without bump maps, fit 128 registers under
-#: GPU_LAUNCH_BOUNDS with a frame within 1 KB (sm_90, docs/gpu.md "Register cap": the demo's
-#: conductor, dielectric and diffuse at 896-968 B, ar_coating's diffuse at 664 B). The others keep
-#: up to 255 registers, as capped their spills overflow the frame: the thin film's (ar_coating
-#: 1,392 B, the beach 4,152 B) and every kernel with a bump map's texture program (the beach's
-#: conductor, diffuse and disney: 1,632-1,984 B).
+#: The material kinds whose shading kernels fit 128 registers under GPU_LAUNCH_BOUNDS with a frame
+#: within 1 KB (sm_90, docs/gpu.md "Register cap" and "The bump step"): the demo's conductor,
+#: dielectric and diffuse at 896-968 B, ar_coating's diffuse at 664 B, the beach's conductor and
+#: diffuse at 968 and 904 B now that its bump map is evaluated in the bump step (1,712 and 1,632 B
+#: before). The others keep up to 255 registers, as capped their spills overflow the frame: the
+#: thin film's (the beach's 1,744 B, its layered walk's 3,464 B) and disney's (the beach's 1,256 B).
+#: The bump step is capped too (the beach's: 128 registers, 432 B).
 CAPPED_KINDS = frozenset({"conductor", "dielectric", "diffuse"})
 
 
@@ -147,7 +148,7 @@ def bump_kernel(features: Features) -> wp.Kernel:
         s = surface_at(scene.geo, hit, scene.shape_flip[scene.geo.inst_shape[hit.inst]] != 0)
         paths.ns[i] = bump_normal(scene, scene.mat.bump[paths.material[i]], s, s.ns)
 
-    return _kernel(bump)
+    return _kernel(bump, capped=True)
 
 
 @lru_cache(maxsize=None)
@@ -177,7 +178,7 @@ def shade_kernel(features: Features, independent: bool, shader: Shader) -> wp.Ke
         if sc.alive:
             push(paths, RAYS, i)
 
-    return _kernel(shade, kind in CAPPED_KINDS and not features.bump)
+    return _kernel(shade, kind in CAPPED_KINDS)
 
 
 def lens_step(features: Features) -> bool:

@@ -35,6 +35,7 @@ CASES = [
     (PBRT / "subsurface_skin.pbrt", None, 24, 24, 2),                 # pbrt-v4's subsurface, spectral body
     (PBRT / "thin_slab_shadow.pbrt", None, 24, 18, 2),                # shadow rays through a thin lens
     (PBRT / "films_walk.pbrt", None, 32, 18, 2),                      # walking and one-pass films, bump maps
+    (PBRT / "bumped_subsurface.pbrt", None, 32, 18, 2),               # bump maps with and without subsurface
 ]
 
 
