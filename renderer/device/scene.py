@@ -59,6 +59,7 @@ class Features:
     # Which lobes the materials can reach (renderer.materials.lobe_features); the defaults compile every lobe.
     multiscatter: bool = True   # some material that may be rough counts the bounces between microfacets
     layered: bool = True        # some thinfilm takes the layered random walk (coated* always do)
+    unlayered: bool = True      # some thinfilm does not (the wavefront then shades the two apart)
     smooth: tuple[str, ...] = ()    # types whose every material is smooth: no GGX lobes compiled for them
     coated_body: bool = True    # some subsurface material has a film on its boundary (renderer.materials.film_body)
     coated_disney: bool = True  # some disney material has a film over its subsurface body (.disney_film)

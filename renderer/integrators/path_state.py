@@ -63,24 +63,28 @@ class PathBuffers:
     sample: wp.array(dtype=PixelSample)     # the pixel sample the scene's sampler draws from (unused: 1 entry)
     hit: wp.array(dtype=Hit)                # the last intersection
     material: wp.array(dtype=int)           # the hit's material, mixes resolved
+    ns: wp.array(dtype=wp.vec3)             # the bump step's shading normal (unused without it: 1 entry)
     shadow_o: wp.array(dtype=wp.vec3)
     shadow_d: wp.array(dtype=wp.vec3)
     shadow_t: wp.array(dtype=float)
     shadow_L: wp.array(dtype=wp.vec3)
-    queue: wp.array2d(dtype=int)            # per queue (RAYS, SHADOWS, then one per material kind), path indices
+    queue: wp.array2d(dtype=int)            # per queue (RAYS ... LENSES, then one per material kind), path indices
     queued: wp.array(dtype=int)             # per queue, the paths pushed into it
     queue_of_kind: wp.array(dtype=int)      # per material kind id, its shading queue
 
 
 #: The queues of :class:`PathBuffers`: paths whose next ray is to be traced, paths with a shadow
-#: ray to trace, then one shading queue per material kind of the scene.
-RAYS, SHADOWS, FIRST_KIND = 0, 1, 2
+#: ray to trace, paths whose material has a bump map (the bump step), shadow rays that meet thin
+#: slabs' faces (the lens step), then one shading queue per material kind of the scene.
+RAYS, SHADOWS, BUMPS, LENSES, FIRST_KIND = 0, 1, 2, 3, 4
 
 
-def path_buffers(n: int, sampled: bool, queue_of_kind: list[int], device: str) -> PathBuffers:
+def path_buffers(n: int, sampled: bool, queue_of_kind: list[int], shading_queues: int, device: str,
+                 bumped: bool = False) -> PathBuffers:
     """Buffers for ``n`` paths; ``sampled``: the scene's sampler (not the independent stream) draws
     the numbers, so each path keeps its pixel sample; ``queue_of_kind``: per material kind id, its
-    shading queue (from FIRST_KIND on; -1: none)."""
+    first shading queue (from FIRST_KIND on; -1: none) of ``shading_queues``; ``bumped``: the bump
+    step runs, so each path keeps its shading normal."""
     def a(dtype, count: int | tuple[int, int] = n) -> wp.array:
         return wp.zeros(count, dtype=dtype, device=device)
 
@@ -95,20 +99,21 @@ def path_buffers(n: int, sampled: bool, queue_of_kind: list[int], device: str) -
     b.rng = a(wp.uint32)
     b.sample = a(PixelSample, n if sampled else 1)
     b.hit = a(Hit)
+    b.ns = a(wp.vec3, n if bumped else 1)
     b.queue_of_kind = wp.array(queue_of_kind, dtype=int, device=device)
-    queues = max(FIRST_KIND, max(queue_of_kind) + 1)
+    queues = FIRST_KIND + shading_queues
     b.queued = a(int, queues)
     b.queue = a(int, (queues, n))
     return b
 
 
-def bytes_per_path(sampled: bool, queues: int) -> int:
+def bytes_per_path(sampled: bool, queues: int, bumped: bool = True) -> int:
     """Device memory of :class:`PathBuffers` per path, from its fields' types: every per-path array,
-    the pixel sample only when ``sampled``, and one index in each of ``queues`` queues (the queue
-    counters and the kind table do not grow with the paths)."""
+    the pixel sample only when ``sampled``, the shading normal only when ``bumped``, and one index in
+    each of ``queues`` queues (the queue counters and the kind table do not grow with the paths)."""
     total = 0
     for name, var in PathBuffers.vars.items():
-        if name in ("queued", "queue_of_kind") or (name == "sample" and not sampled):
+        if name in ("queued", "queue_of_kind") or (name == "sample" and not sampled) or (name == "ns" and not bumped):
             continue
         total += wp.types.type_size_in_bytes(var.type.dtype) * (queues if name == "queue" else 1)
     return total

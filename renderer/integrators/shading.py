@@ -59,13 +59,30 @@ def load_bsdf(mat: Materials, tex: Textures, spectral: RgbWeightTable, spectral_
 def bump_normal(scene: Scene, tid: int, s: Surface, ns: wp.vec3) -> wp.vec3:
     """Shading normal perturbed by a float displacement texture (pbrt's bump mapping, without the
     dn/du term): the displaced surface's tangents cross to the new normal. The offsets move both
-    uv and the point (along dp/du, dp/dv), so every texture mapping sees them."""
+    uv and the point (along dp/du, dp/dv), so every texture mapping sees them. The three lookups
+    share one loop body: one copy of the texture program in the kernel instead of three."""
     uv = s.uv
-    d = texture_eval(scene.tex, tid, uv, s.p, s.ng)[0]
     du = BUMP_DELTA
     dv = BUMP_DELTA
-    d_u = texture_eval(scene.tex, tid, wp.vec2(uv[0] + du, uv[1]), s.p + s.dpdu * du, s.ng)[0]
-    d_v = texture_eval(scene.tex, tid, wp.vec2(uv[0], uv[1] + dv), s.p + s.dpdv * dv, s.ng)[0]
+    d = float(0.0)
+    d_u = float(0.0)
+    d_v = float(0.0)
+    for k in range(3):
+        at = uv
+        p = s.p
+        if k == 1:
+            at = wp.vec2(uv[0] + du, uv[1])
+            p = s.p + s.dpdu * du
+        elif k == 2:
+            at = wp.vec2(uv[0], uv[1] + dv)
+            p = s.p + s.dpdv * dv
+        h = texture_eval(scene.tex, tid, at, p, s.ng)[0]
+        if k == 0:
+            d = h
+        elif k == 1:
+            d_u = h
+        else:
+            d_v = h
     su = s.dpdu + ns * ((d_u - d) / du)
     sv = s.dpdv + ns * ((d_v - d) / dv)
     n = wp.cross(su, sv)

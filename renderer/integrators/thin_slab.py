@@ -54,40 +54,38 @@ def crosses_thin_slab(mat: Materials, m: int, sampled_flags: int) -> bool:
     return (sampled_flags & TRANSMISSION) != 0 and is_thin_slab(mat, m)
 
 
+#: What lies along a shadow ray (:func:`crossing`).
+CLEAR, BLOCKED, SLABS_ONLY = 0, 1, 2
+
+
 @wp.func
-def _crossing(scene: Scene, o: wp.vec3, d: wp.vec3, t_max: float) -> int:
-    """What lies along the ray, by any-hit queries in any order: 0 nothing, 1 something opaque
-    (the ray is blocked whatever else it crosses), 2 thin slabs' faces only. Most shadow rays end
-    here at the cost of the plain any-hit query; only rays past a lens go on to trace its faces."""
+def crossing(scene: Scene, o: wp.vec3, d: wp.vec3, t_max: float) -> int:
+    """What lies along the ray, by any-hit queries in any order: CLEAR nothing, BLOCKED something
+    opaque (the ray is blocked whatever else it crosses), SLABS_ONLY thin slabs' faces only. Most
+    shadow rays end here at the cost of the plain any-hit query; only rays past a lens go on to
+    trace its faces (the wavefront traces those in a kernel of their own)."""
     query = wp.bvh_query_ray(scene.geo.tlas, o, d)
     i = int(0)
-    found = int(0)
+    found = int(CLEAR)
     while wp.bvh_query_next(query, i, t_max):
         m = scene.geo.inst_to_object[i]
         if wp.mesh_query_ray_anyhit(scene.geo.mesh_ids[scene.geo.inst_mesh[i]], wp.transform_point(m, o),
                                     wp.transform_vector(m, d), t_max):
             if not is_thin_slab(scene.mat, scene.shape_material[scene.geo.inst_shape[i]]):
-                return 1
-            found = 2
+                return BLOCKED
+            found = SLABS_ONLY
     return found
 
 
 @lru_cache(maxsize=None)
-def transmittance_query(closest: wp.Function, alpha: bool) -> wp.Function:
-    """``transmitted(scene, o, d, t_max) -> vec3``: what reaches ``o`` along ``d`` from t_max,
-    through thin slabs' faces (0 at any other hit); ``closest`` is the kernel's closest-hit query.
-    Without alpha cut-outs an any-hit pass first tells blocked and clear rays apart (``_crossing``);
-    with them, every ray walks its hits, as alpha needs."""
+def face_walk(closest: wp.Function) -> wp.Function:
+    """``through_faces(scene, o, d, t_max) -> vec3``: the ray traced hit by hit (``closest``, the
+    kernel's closest-hit query), the product of the thin slabs' faces' transmittances it crosses,
+    0 at any other hit or past MAX_FACES faces."""
 
     @wp.func
-    def transmitted(scene: Scene, o: wp.vec3, d: wp.vec3, t_max: float) -> wp.vec3:
+    def through_faces(scene: Scene, o: wp.vec3, d: wp.vec3, t_max: float) -> wp.vec3:
         T = wp.vec3(1.0)
-        if wp.static(not alpha):
-            crossing = _crossing(scene, o, d, t_max)
-            if crossing == 0:
-                return T
-            if crossing == 1:
-                return wp.vec3(0.0)
         travelled = float(0.0)
         for _k in range(MAX_FACES):
             hit = wp.static(closest)(scene, o, d, t_max - travelled)
@@ -107,5 +105,32 @@ def transmittance_query(closest: wp.Function, alpha: bool) -> wp.Function:
             travelled += wp.dot(step - o, d)
             o = step
         return wp.vec3(0.0)
+
+    return through_faces
+
+
+@wp.func
+def crossing_transmittance(c: int) -> wp.vec3:
+    """The transmittance of a ray that ``crossing`` found CLEAR (1) or BLOCKED (0)."""
+    if c == BLOCKED:
+        return wp.vec3(0.0)
+    return wp.vec3(1.0)
+
+
+@lru_cache(maxsize=None)
+def transmittance_query(closest: wp.Function, alpha: bool) -> wp.Function:
+    """``transmitted(scene, o, d, t_max) -> vec3``: what reaches ``o`` along ``d`` from t_max,
+    through thin slabs' faces (0 at any other hit); ``closest`` is the kernel's closest-hit query.
+    Without alpha cut-outs an any-hit pass first tells blocked and clear rays apart (``crossing``);
+    with them, every ray walks its hits, as alpha needs."""
+    through_faces = face_walk(closest)
+
+    @wp.func
+    def transmitted(scene: Scene, o: wp.vec3, d: wp.vec3, t_max: float) -> wp.vec3:
+        if wp.static(not alpha):
+            c = crossing(scene, o, d, t_max)
+            if c != SLABS_ONLY:
+                return crossing_transmittance(c)
+        return wp.static(through_faces)(scene, o, d, t_max)
 
     return transmitted

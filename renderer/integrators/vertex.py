@@ -173,17 +173,28 @@ def path_functions(features: Features, independent: bool) -> PathFunctions:
     return PathFunctions(start, arrive, record)
 
 
+def moves_vertex(features: Features, kind: str) -> bool:
+    """Whether subsurface scattering may move a vertex of ``kind`` before it is shaded: its shading
+    frame (and bump map) is then taken where the light leaves, which no earlier step knows."""
+    return features.subsurface and kind in (disney.NAME, subsurface.NAME)
+
+
 @lru_cache(maxsize=None)
-def scatter_function(features: Features, independent: bool, kind: str | None = None) -> wp.Function:
+def scatter_function(features: Features, independent: bool, kind: str | None = None,
+                     bumped: bool = False) -> wp.Function:
     """``scatter(scene, smp, ps, path, hit, s, m, rr_depth, rr_mean) -> Scattered`` at a vertex of material ``m``
     (of ``kind`` only, when given). The numbers drawn are the scene's: a material that scatters
-    below its surface anywhere in the scene takes a subsurface seed at every vertex."""
+    below its surface anywhere in the scene takes a subsurface seed at every vertex. ``bumped``: the
+    caller put the bump-mapped shading normal in ``s.ns`` (the wavefront's bump step, so a shading
+    kernel holds no bump texture program); not for a kind whose vertex moves (``moves_vertex``)."""
     shaded = features if kind is None else dataclasses.replace(features, materials=(kind,))
-    shading_frame, eval_pdf, sample_bsdf = shading_functions(shaded)
+    draw_sss = features.subsurface
+    has_sss = any(moves_vertex(features, k) for k in shaded.materials)
+    assert not (bumped and has_sss), "a moved vertex takes its bump map where it ends"
+    shading_frame, eval_pdf, sample_bsdf = shading_functions(dataclasses.replace(shaded, bump=False) if bumped
+                                                             else shaded)
     sample_light = light_sampler(*dispatch(features.lights, "sample"))
     light_sampling = features.nee and len(features.lights) > 0
-    draw_sss = features.subsurface
-    has_sss = draw_sss and any(k in shaded.materials for k in (disney.NAME, subsurface.NAME))
     subsurface_scatter = subsurface_step(shaded)
     dispersion = features.dispersion and dielectric.NAME in shaded.materials
     media = features.media

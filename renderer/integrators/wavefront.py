@@ -4,10 +4,13 @@ kernels that each do one step for every path of a launch, with the paths' state 
 
 Per launch: ``start`` (camera rays, the sampler's start), then per depth ``intersect`` (closest
 hits), ``hits`` (light that escaped or was hit, the end at the maximum depth, mixes resolved to
-the material that shades), one ``shade_<kind>`` per material kind of the scene (a vertex of that
-kind: its BSDF, dispersion, subsurface, the light sample's shadow ray and the BSDF sample that
-continues the path), ``shadow`` (the shadow rays, and what they let through), until no path goes
-on; then ``finish`` (the film, dropped samples and ray counts as the megakernel writes them).
+the material that shades), ``bump`` in scenes with bump maps (the bump-mapped shading normal of
+the paths whose material has one, so the shading kernels hold no texture program for it), one
+``shade_<kind>`` per material kind of the scene (a vertex of that kind: its BSDF, dispersion,
+subsurface, the light sample's shadow ray and the BSDF sample that continues the path),
+``shadow`` (the shadow rays, and what they let through) and ``lenses`` in scenes with thin slabs
+(the shadow rays that meet only thin slabs' faces, traced face by face), until no path goes on;
+then ``finish`` (the film, dropped samples and ray counts as the megakernel writes them).
 
 Each step calls the functions the megakernel calls (:mod:`renderer.integrators.vertex`), in the
 same order per path, so the CPU image is the megakernel's bit for bit. A kernel holds only its
@@ -21,27 +24,55 @@ from __future__ import annotations
 
 import dataclasses
 from functools import lru_cache
+from typing import NamedTuple
 
 import warp as wp
 
 from renderer.device.kernel_options import GPU_LAUNCH_BOUNDS, KERNEL_OPTIONS
 from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import surface_at
-from renderer.integrators.path_state import (FIRST_KIND, RAYS, SHADOWS, PathBuffers, load_path, path_buffers, push,
-                                             push_shadow, store_path)
-from renderer.integrators.vertex import path_functions, scatter_function
+from renderer.integrators.path_state import (BUMPS, FIRST_KIND, LENSES, RAYS, SHADOWS, PathBuffers, load_path,
+                                             path_buffers, push, push_shadow, store_path)
+from renderer.integrators.shading import bump_normal
+from renderer.integrators.thin_slab import SLABS_ONLY, THINFILM, crossing, crossing_transmittance, face_walk
+from renderer.integrators.vertex import moves_vertex, path_functions, scatter_function
 from renderer.integrators.visibility import ray_queries
-from renderer.materials import REGISTRY, kind_id
+from renderer.materials import REGISTRY, kind_id, thinfilm
 from renderer.sampling.samplers import PixelSample, SamplerParams
 
+#: A thin film's flag for the layered walk (its materials' own shading queue, ``Shader.walk``).
+LAYERED = wp.constant(thinfilm.FLAG.layered)
 
-#: The material kinds whose shading kernels, in scenes without bump maps, fit 128 registers under
-#: GPU_LAUNCH_BOUNDS with a frame within 1 KB (sm_90, docs/gpu.md "Register cap": the demo's
-#: conductor, dielectric and diffuse at 896-968 B, ar_coating's diffuse at 664 B). The others keep
-#: up to 255 registers, as capped their spills overflow the frame: the thin film's (ar_coating
-#: 1,392 B, the beach 4,152 B) and every kernel with a bump map's texture program (the beach's
-#: conductor, diffuse and disney: 1,632-1,984 B).
+
+#: The material kinds whose shading kernels fit 128 registers under GPU_LAUNCH_BOUNDS with a frame
+#: within 1 KB (sm_90, docs/gpu.md "Register cap" and "The bump step"): the demo's conductor,
+#: dielectric and diffuse at 896-968 B, ar_coating's diffuse at 664 B, the beach's conductor and
+#: diffuse at 968 and 904 B now that its bump map is evaluated in the bump step (1,712 and 1,632 B
+#: before). The others keep up to 255 registers, as capped their spills overflow the frame: the
+#: thin film's (the beach's 1,744 B, its layered walk's 3,464 B) and disney's (the beach's 1,256 B).
+#: The bump step is capped too (the beach's: 128 registers, 432 B).
 CAPPED_KINDS = frozenset({"conductor", "dielectric", "diffuse"})
+
+
+class Shader(NamedTuple):
+    """One shading kernel and its queue: the materials of ``kind``; for thin films, ``walk`` True
+    the ones that take the layered random walk, False the others (kernels without the walk's code)."""
+
+    name: str
+    kind: str
+    walk: bool
+
+
+def shaders(features: Features) -> list[Shader]:
+    """The shading kernels of a scene of ``features``, in queue order (from FIRST_KIND on): one per
+    material kind, two for thin films when some take the layered walk and some do not, so the
+    walk, rare and register-hungry, stays out of the other films' kernel."""
+    out = []
+    for kind in features.materials:
+        out.append(Shader(f"shade_{kind}", kind, kind == thinfilm.NAME and features.layered and not features.unlayered))
+        if kind == thinfilm.NAME and features.layered and features.unlayered:
+            out.append(Shader(f"shade_{kind}_walk", kind, True))
+    return out
 
 
 def _kernel(f, capped: bool = False) -> wp.Kernel:
@@ -83,54 +114,115 @@ def intersect_kernel(features: Features) -> wp.Kernel:
 def hits_kernel(features: Features) -> wp.Kernel:
     arrive = path_functions(features, False).arrive     # does not draw numbers: one variant serves both
 
+    bump = features.bump
+    walks = [FIRST_KIND + q for q, sh in enumerate(shaders(features)) if sh.name.endswith("_walk")]
+    walk_queue = walks[0] if walks else -1      # thin films that walk, apart from the others
+
     def hits(scene: Scene, paths: PathBuffers, max_depth: int):
         i = paths.queue[RAYS, wp.tid()]
         ar = arrive(scene, load_path(paths, i), paths.hit[i], max_depth)
         paths.L[i] = ar.path.L
         if ar.shade:
             paths.material[i] = ar.m
-            push(paths, paths.queue_of_kind[scene.mat.kind[ar.m]], i)
+            kind = scene.mat.kind[ar.m]
+            queue = paths.queue_of_kind[kind]
+            if wp.static(walk_queue >= 0):
+                if kind == THINFILM and (scene.mat.flags[ar.m] & LAYERED) != 0:
+                    queue = walk_queue
+            push(paths, queue, i)
+            if wp.static(bump):
+                if scene.mat.bump[ar.m] >= 0:
+                    push(paths, BUMPS, i)
 
     return _kernel(hits)
 
 
 @lru_cache(maxsize=None)
-def shade_kernel(features: Features, independent: bool, kind: str) -> wp.Kernel:
-    scatter = scatter_function(features, independent, kind)
-    queue = FIRST_KIND + features.materials.index(kind)
+def bump_kernel(features: Features) -> wp.Kernel:
+    """The bump step: for every path whose material has a bump map, its bump-mapped shading normal
+    (the megakernel's ``bump_normal`` at the same surface), kept for its shading kernel."""
+
+    def bump(scene: Scene, paths: PathBuffers):
+        i = paths.queue[BUMPS, wp.tid()]
+        hit = paths.hit[i]
+        s = surface_at(scene.geo, hit, scene.shape_flip[scene.geo.inst_shape[hit.inst]] != 0)
+        paths.ns[i] = bump_normal(scene, scene.mat.bump[paths.material[i]], s, s.ns)
+
+    return _kernel(bump, capped=True)
+
+
+@lru_cache(maxsize=None)
+def shade_kernel(features: Features, independent: bool, shader: Shader) -> wp.Kernel:
+    kind = shader.kind
+    bumped = features.bump and not moves_vertex(features, kind)    # its normal from the bump step
+    # thin films apart from those that walk compile without the walk (their arithmetic is the same)
+    films = features if shader.walk or kind != thinfilm.NAME else dataclasses.replace(features, layered=False)
+    scatter = scatter_function(films, independent, kind, bumped)
+    queue = FIRST_KIND + shaders(features).index(shader)
 
     def shade(scene: Scene, smp: SamplerParams, paths: PathBuffers, rr_depth: int):
         i = paths.queue[queue, wp.tid()]
         hit = paths.hit[i]
+        m = paths.material[i]
         s = surface_at(scene.geo, hit, scene.shape_flip[scene.geo.inst_shape[hit.inst]] != 0)
+        if wp.static(bumped):
+            if scene.mat.bump[m] >= 0:
+                s.ns = paths.ns[i]
         ps = PixelSample()
         if wp.static(not independent):
             ps = paths.sample[i]
-        sc = scatter(scene, smp, ps, load_path(paths, i), hit, s, paths.material[i], rr_depth, 1.0)
+        sc = scatter(scene, smp, ps, load_path(paths, i), hit, s, m, rr_depth, 1.0)
         store_path(paths, i, sc.path)
         if sc.shadow.on:
             push_shadow(paths, i, sc.shadow)
         if sc.alive:
             push(paths, RAYS, i)
 
-    return _kernel(shade, kind in CAPPED_KINDS and not features.bump)
+    return _kernel(shade, kind in CAPPED_KINDS)
+
+
+def lens_step(features: Features) -> bool:
+    """Whether shadow rays that meet thin slabs' faces go to a kernel of their own (``lenses``):
+    with alpha cut-outs every such shadow ray walks its hits in ``shadow``, as alpha needs."""
+    return features.thin_slabs and not features.alpha
 
 
 @lru_cache(maxsize=None)
 def shadow_kernel(features: Features) -> wp.Kernel:
     blocked, transmitted = ray_queries(features)[1:]
     thin_slabs = features.thin_slabs
+    lenses = lens_step(features)
 
     def shadow(scene: Scene, paths: PathBuffers):
         i = paths.queue[SHADOWS, wp.tid()]
         paths.rays[i] = paths.rays[i] + 1
-        if wp.static(thin_slabs):       # through thin lenses (renderer.integrators.thin_slab)
+        if wp.static(lenses):           # the rays past a lens to the lens step (renderer.integrators.thin_slab)
+            c = crossing(scene, paths.shadow_o[i], paths.shadow_d[i], paths.shadow_t[i])
+            if c == SLABS_ONLY:
+                push(paths, LENSES, i)
+            else:
+                paths.L[i] = paths.L[i] + wp.cw_mul(paths.shadow_L[i], crossing_transmittance(c))
+        elif wp.static(thin_slabs):
             paths.L[i] = paths.L[i] + wp.cw_mul(paths.shadow_L[i], transmitted(scene, paths.shadow_o[i],
                                                                                paths.shadow_d[i], paths.shadow_t[i]))
         elif not blocked(scene, paths.shadow_o[i], paths.shadow_d[i], paths.shadow_t[i]):
             paths.L[i] = paths.L[i] + paths.shadow_L[i]
 
     return _kernel(shadow)
+
+
+@lru_cache(maxsize=None)
+def lens_kernel(features: Features) -> wp.Kernel:
+    """The lens step: shadow rays that meet only thin slabs' faces, traced face by face (the
+    megakernel's ``transmitted`` past its any-hit pass), off the ordinary shadow kernel."""
+    through_faces = face_walk(ray_queries(features).closest)
+
+    def lenses(scene: Scene, paths: PathBuffers):
+        i = paths.queue[LENSES, wp.tid()]
+        paths.L[i] = paths.L[i] + wp.cw_mul(paths.shadow_L[i], through_faces(scene, paths.shadow_o[i],
+                                                                             paths.shadow_d[i], paths.shadow_t[i]))
+
+    return _kernel(lenses)
 
 
 @lru_cache(maxsize=None)
@@ -149,9 +241,13 @@ def wavefront_kernels(features: Features, independent: bool) -> dict[str, wp.Ker
     """By name, in launch order: the kernels of one wavefront pass for a scene of ``features``."""
     kernels = {"start": start_kernel(features, independent), "intersect": intersect_kernel(features),
                "hits": hits_kernel(features)}
-    for kind in features.materials:
-        kernels[f"shade_{kind}"] = shade_kernel(features, independent, kind)
+    if features.bump:
+        kernels["bump"] = bump_kernel(features)
+    for shader in shaders(features):
+        kernels[shader.name] = shade_kernel(features, independent, shader)
     kernels["shadow"] = shadow_kernel(features)
+    if lens_step(features):
+        kernels["lenses"] = lens_kernel(features)
     kernels["finish"] = finish_kernel(features)
     return kernels
 
@@ -168,13 +264,15 @@ class Wavefront:
     device: str
 
     def __post_init__(self) -> None:
-        kinds = [name.removeprefix("shade_") for name in self.kernels if name.startswith("shade_")]
+        names = [name for name in self.kernels if name.startswith("shade_")]     # in queue order (``shaders``)
         queue_of_kind = [-1] * len(REGISTRY)
-        for q, kind in enumerate(kinds):
-            queue_of_kind[kind_id(kind)] = FIRST_KIND + q
-        self.buffers = [path_buffers(self.max_paths, not self.independent, queue_of_kind, self.device)
-                        for _ in range(self.slots)]
-        self.shaders = [self.kernels[f"shade_{kind}"] for kind in kinds]
+        for q, name in enumerate(names):
+            k = kind_id(name.removeprefix("shade_").removesuffix("_walk"))
+            if queue_of_kind[k] < 0:        # a kind's first queue; hits sends walking films to the second
+                queue_of_kind[k] = FIRST_KIND + q
+        self.buffers = [path_buffers(self.max_paths, not self.independent, queue_of_kind, len(names), self.device,
+                                     "bump" in self.kernels) for _ in range(self.slots)]
+        self.shaders = [self.kernels[name] for name in names]
 
     def launch(self, slot: int, scene: Scene, smp: SamplerParams, seed: int, sample_index: int, first_row: int,
                rows: int, max_depth: int, rr_depth: int, film: wp.array, bad_samples: wp.array,
@@ -182,7 +280,8 @@ class Wavefront:
         """One sample for every pixel of rows ``first_row ...``, added as the megakernel adds it.
         Every kernel after ``start`` runs over a queue, whose length the host reads (twice per
         depth: after ``hits``, the shading queues; after shading, the rays and shadow rays to
-        trace); the loop ends when no path is left to trace, by ``max_depth`` at the latest."""
+        trace); the loop ends when no path is left to trace, by ``max_depth`` at the latest. The bump
+        step runs before the shading kernels, the lens step after the shadow kernel."""
         k, paths, dev = self.kernels, self.buffers[slot], self.device
         n = rows * scene.cam.width
         wp.launch(k["start"], dim=n, inputs=[scene, smp, seed, sample_index, first_row, paths], device=dev)
@@ -193,6 +292,8 @@ class Wavefront:
             wp.launch(k["hits"], dim=tracing, inputs=[scene, paths, max_depth], device=dev)
             queued = paths.queued.numpy().copy()
             paths.queued.zero_()
+            if queued[BUMPS] > 0:
+                wp.launch(k["bump"], dim=int(queued[BUMPS]), inputs=[scene, paths], device=dev)
             for shade, count in zip(self.shaders, queued[FIRST_KIND:]):
                 if count > 0:
                     wp.launch(shade, dim=int(count), inputs=[scene, smp, paths, rr_depth], device=dev)
@@ -200,4 +301,7 @@ class Wavefront:
             tracing, shadows = int(queued[RAYS]), int(queued[SHADOWS])
             if shadows > 0:
                 wp.launch(k["shadow"], dim=shadows, inputs=[scene, paths], device=dev)
+                lenses = int(paths.queued.numpy()[LENSES]) if "lenses" in k else 0
+                if lenses > 0:
+                    wp.launch(k["lenses"], dim=lenses, inputs=[scene, paths], device=dev)
         wp.launch(k["finish"], dim=n, inputs=[scene, paths, first_row, film, bad_samples, ray_count], device=dev)

@@ -201,10 +201,12 @@ def lobe_features(descs: list[MaterialDesc]) -> dict[str, Any]:
     """The fields of :class:`renderer.device.scene.Features` that say which lobes a scene of these
     materials can reach: ``multiscatter`` (some material that may be rough counts the bounces
     between microfacets), ``layered`` (some thinfilm takes the layered walk; coateddiffuse and
-    coatedconductor always do), ``smooth`` (:func:`smooth_kinds`), ``coated_body`` (some
-    subsurface material has a film on its boundary) and ``coated_disney`` (some disney material has one)."""
+    coatedconductor always do), ``unlayered`` (some thinfilm does not), ``smooth``
+    (:func:`smooth_kinds`), ``coated_body`` (some subsurface material has a film on its boundary)
+    and ``coated_disney`` (some disney material has one)."""
     return {"multiscatter": any(multiscatters(d) and may_be_rough(d) for d in descs),
             "layered": any(d.kind == thinfilm.NAME and thinfilm.walks(d.values) for d in descs),
+            "unlayered": any(d.kind == thinfilm.NAME and not thinfilm.walks(d.values) for d in descs),
             "smooth": smooth_kinds(descs),
             "coated_body": any(d.kind == subsurface.NAME and subsurface.has_coating(d.values) for d in descs),
             "coated_disney": any(d.kind == disney.NAME and has_film(d.values) for d in descs)}

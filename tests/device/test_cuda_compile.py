@@ -126,6 +126,25 @@ def test_representative_scene_wavefront_fits_the_target(capsys):
         assert stack <= TARGET.stack_bytes, (name, stack)
 
 
+def test_bump_and_lens_steps_fit_the_target():
+    """A bump map's texture program runs in the wavefront's bump step, which fits the design's budget
+    under the register cap, and a scene with thin lenses traces their faces in the lens step, so its
+    shadow kernel stays the plain any-hit query's size (with the faces' walk inside it the beach's
+    was 215 registers and a 912 B frame: docs/gpu.md, "The bump step, the lens step and the walk's
+    own kernel")."""
+    from renderer.api import load_scene
+    from renderer.device.scene import upload
+    from renderer.integrators.wavefront import bump_kernel, shadow_kernel
+
+    data = ROOT / "tests" / "data" / "pbrt"
+    bumped = upload(load_scene(data / "films_walk.pbrt"), "cpu", 8, 8).features
+    lenses = upload(load_scene(data / "thin_slab_shadow.pbrt"), "cpu", 8, 8).features
+    assert bumped.bump and lenses.thin_slabs
+    for row in compile_kernels({"bump": bump_kernel(bumped), "shadow": shadow_kernel(lenses)}, [90]):
+        assert row.resources.registers <= TARGET.registers, (row.name, row.resources)
+        assert row.resources.stack_bytes <= TARGET.stack_bytes, (row.name, row.resources)
+
+
 def test_gpu_check_refuses_without_a_gpu():
     import subprocess
     import sys

@@ -20,7 +20,8 @@ PBRT = ROOT / "tests" / "data" / "pbrt"
 
 #: (scene, sampler or None for the scene's, width, height, spp): together they cover every
 #: material family, mixes, alpha cut-outs, dispersion, subsurface scattering, bump maps,
-#: environment, distant and area lights, thin slabs, and four samplers (checked below).
+#: environment, distant and area lights, thin slabs, thin films with and without the layered walk
+#: in one scene, and four samplers (checked below).
 CASES = [
     (ROOT / "scenes" / "demo.pbrt", None, 32, 18, 2),                 # zsobol; glass, metals, area light
     (ROOT / "scenes" / "demo.pbrt", "independent", 32, 18, 2),
@@ -33,6 +34,8 @@ CASES = [
     (PBRT / "v3_materials_upgraded.pbrt", "halton", 32, 24, 2),       # coatings, a bump map, a mix
     (PBRT / "subsurface_skin.pbrt", None, 24, 24, 2),                 # pbrt-v4's subsurface, spectral body
     (PBRT / "thin_slab_shadow.pbrt", None, 24, 18, 2),                # shadow rays through a thin lens
+    (PBRT / "films_walk.pbrt", None, 32, 18, 2),                      # walking and one-pass films, bump maps
+    (PBRT / "bumped_subsurface.pbrt", None, 32, 18, 2),               # bump maps with and without subsurface
 ]
 
 
@@ -52,6 +55,7 @@ def test_cases_cover_the_features():
     assert {"infinite", "distant", "diffuse"} <= lights, lights
     for flag in ("mix", "alpha", "dispersion", "subsurface", "bump", "thin_slabs"):
         assert any(getattr(f, flag) for f in features), flag
+    assert any(f.layered and f.unlayered and f.bump for f in features)     # the walk's own kernel
     samplers = {c[1] or load_scene(c[0]).sampler.kind for c in CASES}
     assert {"independent", "stratified", "zsobol", "halton"} <= samplers, samplers
 
@@ -89,6 +93,12 @@ def test_device_default_and_kernels():
     assert names == ["start", "intersect", "hits", *[f"shade_{k}" for k in features.materials], "shadow",
                      "finish", "film"]
     assert list(render_kernels(features, False, aov=True)) == ["path", "film", "aov"]
+    films = upload(load_scene(PBRT / "films_walk.pbrt"), "cpu", 8, 8).features
+    assert list(render_kernels(films, False, wavefront=True)) == [
+        "start", "intersect", "hits", "bump", "shade_diffuse", "shade_thinfilm", "shade_thinfilm_walk", "shadow",
+        "finish", "film"]
+    lens = upload(load_scene(PBRT / "thin_slab_shadow.pbrt"), "cpu", 8, 8).features
+    assert list(render_kernels(lens, False, wavefront=True))[-4:] == ["shadow", "lenses", "finish", "film"]
 
 
 def test_scenes_with_media_keep_the_megakernel():

@@ -86,15 +86,16 @@ def test_specialised_lobes_equal_every_lobe(name, values):
 
 def test_scene_features():
     demo = load_scene(ROOT / "scenes" / "demo.pbrt")      # smooth glass and mirror, rough copper
-    assert lobe_features(demo.materials) == {"multiscatter": False, "layered": False, "smooth": ("dielectric",),
-                                             "coated_body": False, "coated_disney": False}
+    assert lobe_features(demo.materials) == {"multiscatter": False, "layered": False, "unlayered": False,
+                                             "smooth": ("dielectric",), "coated_body": False, "coated_disney": False}
     assert lobe_features(with_multiscatter(demo).materials)["multiscatter"]
     # smooth films: their multiscatter (on by default) has nothing to compensate
     coating = load_scene(ROOT / "scenes" / "ar_coating.pbrt")
-    assert lobe_features(coating.materials) == {"multiscatter": False, "layered": False, "smooth": ("thinfilm",),
-                                                "coated_body": False, "coated_disney": False}
+    assert lobe_features(coating.materials) == {"multiscatter": False, "layered": False, "unlayered": True,
+                                                "smooth": ("thinfilm",), "coated_body": False, "coated_disney": False}
     rough = [material("thinfilm", roughness=0.1), material("thinfilm", layered=True)]
-    assert lobe_features(rough) == {"multiscatter": True, "layered": True, "smooth": (), "coated_body": False,
-                                    "coated_disney": False}
+    assert lobe_features(rough) == {"multiscatter": True, "layered": True, "unlayered": True, "smooth": (),
+                                    "coated_body": False, "coated_disney": False}
     assert lobe_features([material("conductor", uroughness=0.0, vroughness=0.1, multiscatter=True)]) == {
-        "multiscatter": True, "layered": False, "smooth": (), "coated_body": False, "coated_disney": False}
+        "multiscatter": True, "layered": False, "unlayered": False, "smooth": (), "coated_body": False,
+        "coated_disney": False}
