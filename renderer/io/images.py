@@ -81,7 +81,7 @@ def _open(path: Path):
     with _quiet_decoders():
         reader = oiio.ImageInput.open(str(path), config)
     if reader is None:
-        raise OSError(f"cannot read image {path}: {_one_line(oiio.geterror()) or 'not a readable image'}")
+        raise OSError(f"cannot read image {path}: {_library_error(oiio) or 'not a readable image'}")
     return reader
 
 
@@ -93,9 +93,15 @@ def _quiet_decoders():
     return native_stderr(keep=lambda line: not line.startswith("libpng "))
 
 
-def _one_line(message: str) -> str:
-    """OpenImageIO's messages span lines; ours are one line each."""
-    return " ".join(message.split())
+def _library_error(source) -> str:
+    """The last error of OpenImageIO (or of one reader), read and cleared, as one line. Its message
+    can quote the file's own bytes (a mangled attribute name), which the binding fails to decode as
+    UTF-8: that message is replaced, not raised in place of ours."""
+    try:
+        message = source.geterror()
+    except UnicodeDecodeError:
+        return "the decoder's message is not text (a mangled header)"
+    return " ".join(message.split())    # OpenImageIO's messages span lines; ours are one line each
 
 
 def _channels(names: tuple[str, ...]) -> list[int]:
@@ -159,7 +165,7 @@ def read_stored(path: str | Path, max_channels: int | None = None) -> np.ndarray
                 else:
                     strip = reader.read_scanlines(0, 0, spec.y + y, spec.y + y1, spec.z, lo, hi, fmt)
             if strip is None:
-                raise OSError(f"cannot read image {path}: {_one_line(reader.geterror()) or 'its pixels are unreadable'}")
+                raise OSError(f"cannot read image {path}: {_library_error(reader) or 'its pixels are unreadable'}")
             strip = strip.reshape(y1 - y, w, hi - lo)
             out[y:y1] = strip if pick is None else strip[..., pick]
         return out
@@ -169,7 +175,7 @@ def read_stored(path: str | Path, max_channels: int | None = None) -> np.ndarray
         raise OSError(f"cannot read image {path}: {e or type(e).__name__}") from e
     finally:
         reader.close()
-        oiio.geterror()        # clear it: OpenImageIO complains at exit about unread errors
+        _library_error(oiio)   # clear it: OpenImageIO complains at exit about unread errors
 
 
 def code_values(srgb: bool | None) -> np.ndarray:

@@ -160,6 +160,20 @@ def test_headers_claiming_more_than_the_file_or_the_machine_are_refused_in_one_l
     assert str(tmp_path / "big.png") in str(info.value) and "\n" not in str(info.value)
 
 
+def test_an_exr_whose_mangled_header_gets_a_message_that_is_not_text_is_refused_by_name(tmp_path):
+    """OpenImageIO's error quotes the mangled attribute name (a byte 0x80, not UTF-8) and its Python
+    binding fails to decode it: still our one-line refusal naming the file (found by the fuzzer)."""
+    write_exr(tmp_path / "bad.exr", np.zeros((4, 8, 3), np.float32))
+    data = (tmp_path / "bad.exr").read_bytes()
+    assert b"channels\x00chlist" in data and b"type\x00string" in data
+    data = data.replace(b"channels\x00chlist", b"\x01hannels\x00chlist", 1)
+    data = data.replace(b"type\x00string", b"type\x80string", 1)
+    (tmp_path / "bad.exr").write_bytes(data)
+    with pytest.raises(OSError, match="cannot read image") as info:
+        read_stored(tmp_path / "bad.exr")
+    assert str(tmp_path / "bad.exr") in str(info.value) and "\n" not in str(info.value)
+
+
 def test_an_exr_claiming_more_than_the_machine_is_refused_by_name(tmp_path):
     from renderer.device.footprint import machine_memory
 
