@@ -85,7 +85,7 @@ def _hue_spread(lab: np.ndarray) -> tuple[float, float]:
     return float(np.degrees(np.sqrt(-2.0 * np.log(max(r, 1e-12))))), float(hi - lo)
 
 
-def measure(exr: Path, lens: str, nacre: str, grains: str, images: Path) -> None:
+def measure(exr: Path, lens: str, nacre: str, shell: str, grains: str, images: Path) -> None:
     from renderer.api import load_scene
     from renderer.io.images import read_exr, write_png
 
@@ -121,7 +121,7 @@ def measure(exr: Path, lens: str, nacre: str, grains: str, images: Path) -> None
               f"{len(ids)} distinct grain instances seen, {int((counts >= 4).sum())} of them over 4 pixels |")
     images.mkdir(parents=True, exist_ok=True)
     write_png(images / "beach_final.png", img)
-    for name, m in (("lens", lens_m), ("shell", nacre_m), ("grains", grain_m & fg)):
+    for name, m in (("lens", lens_m), ("shell", _mask(material, names, shell)), ("grains", grain_m & fg)):
         b = _crop_box(m, CROP)
         if b is not None:
             write_png(images / f"beach_final_{name}.png", np.concatenate([noisy[b], img[b]], axis=1))
@@ -137,13 +137,14 @@ def main() -> int:
     m = sub.add_parser("measure")
     m.add_argument("--exr", type=Path, default=OUT / "beach_final.exr")
     m.add_argument("--lens", default="lens*", help="material-name pattern of the lens pixels")
-    m.add_argument("--nacre", default="nacre*")
+    m.add_argument("--nacre", default="*nacre*", help="the nacre pixels whose hue spread is measured (every shell's)")
+    m.add_argument("--shell", default="oyster*", help="the shell the crop is centred on (the pearl oyster, issue 33)")
     m.add_argument("--grains", default="grain*")
     m.add_argument("--images", type=Path, default=OUT, help="where the PNGs go (docs/images for the README)")
     a = ap.parse_args()
     if a.cmd == "render":
         return render(a.spp, a.minutes, a.threads)
-    measure(a.exr, a.lens, a.nacre, a.grains, a.images)
+    measure(a.exr, a.lens, a.nacre, a.shell, a.grains, a.images)
     return 0
 
 
