@@ -51,3 +51,18 @@ def single_object_scene(material: MaterialDesc, mesh: MeshDesc | None = None, sk
     desc.instance_sets.append(InstanceSetDesc(shapes=[0], transforms=np.eye(4)[None]))
     desc.lights.append(light("infinite", L=(sky, sky, sky)))
     return desc
+
+
+def flat_body_scene(kind: str, material_params: str, integrator: str = "volpath") -> str:
+    """pbrt-v4 text of a wide flat slab of material ``kind`` under a white sky, seen from straight
+    above by a 4x4 orthographic camera: the flat-body closed forms of the subsurface tests."""
+    return f"""LookAt 0 5 0  0 0 0  0 0 1
+Camera "orthographic" "float screenwindow" [-0.5 0.5 -0.5 0.5]
+Film "rgb" "integer xresolution" [4] "integer yresolution" [4] "string filename" "x.exr"
+Sampler "independent" "integer pixelsamples" [64]
+Integrator "{integrator}" "integer maxdepth" [3]
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+Material "{kind}" {material_params}
+Shape "trianglemesh" "point3 P" [-40 0 -40  40 0 -40  40 0 40  -40 0 40] "integer indices" [0 2 1 0 3 2]
+"""

@@ -16,7 +16,7 @@ from renderer.api import init_warp
 from renderer.materials import disney, disney_film, hooks, lobe_features, material
 from renderer.materials.beam_diffusion import fresnel_dielectric
 from renderer.materials.bsdf import BSDF, BSDFEval, BSDFSample
-from scenes_py import single_object_scene
+from scenes_py import flat_body_scene, single_object_scene
 from test_subsurface_film import film_RT
 
 init_warp()
@@ -106,18 +106,6 @@ def test_plain_equivalent_films_are_the_plain_material(film):
     np.testing.assert_allclose(images[1], images[0], rtol=1e-4, atol=1e-5)
 
 
-FLAT = """LookAt 0 5 0  0 0 0  0 0 1
-Camera "orthographic" "float screenwindow" [-0.5 0.5 -0.5 0.5]
-Film "rgb" "integer xresolution" [4] "integer yresolution" [4] "string filename" "x.exr"
-Sampler "independent" "integer pixelsamples" [64]
-Integrator "path" "integer maxdepth" [3]
-WorldBegin
-LightSource "infinite" "rgb L" [1 1 1]
-Material "disney" {params}
-Shape "trianglemesh" "point3 P" [-40 0 -40  40 0 -40  40 0 40  -40 0 40] "integer indices" [0 2 1 0 3 2]
-"""
-
-
 def _film_text(film: dict) -> str:
     if "layer_eta" in film:
         return (f'"float layer_eta" [{" ".join(map(str, film["layer_eta"]))}] "float layer_thickness" '
@@ -134,7 +122,7 @@ def test_flat_coated_body_under_white_sky(tmp_path, film):
     colour = np.array([0.9, 0.5, 0.2])
     params = (f'"rgb color" [{colour[0]} {colour[1]} {colour[2]}] "float roughness" [0] '
               '"rgb scatterdistance" [0.2 0.1 0.05] ')
-    (tmp_path / "flat.pbrt").write_text(FLAT.format(params=params + _film_text(film)))
+    (tmp_path / "flat.pbrt").write_text(flat_body_scene("disney", params + _film_text(film), integrator="path"))
     img = renderer.render(renderer.load_scene(tmp_path / "flat.pbrt"), spp=1024, seed=3,
                           thin_film="rgb3").reshape(-1, 3)
     r0, t0 = (x[0] for x in film_RT(film, np.array([1.0]), ETA))
@@ -176,7 +164,7 @@ def test_white_coated_body_in_a_white_furnace(film):
     ('"rgb scatterdistance" [0.1 0.1 0.1] "float thickness" [-5]', 'thickness'),
 ])
 def test_bad_films_are_refused_with_their_line(tmp_path, params, message):
-    (tmp_path / "bad.pbrt").write_text(FLAT.format(params=params))
+    (tmp_path / "bad.pbrt").write_text(flat_body_scene("disney", params, integrator="path"))
     with pytest.raises(renderer.errors.SceneError) as e:
         renderer.load_scene(tmp_path / "bad.pbrt")
     assert message in str(e.value) and "bad.pbrt:8" in str(e.value)

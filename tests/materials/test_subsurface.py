@@ -15,6 +15,7 @@ from renderer.errors import SceneError
 from renderer.color import rgb_spectrum
 from renderer.materials import beam_diffusion as bd
 from bsdf_harness import bsdf_moments
+from scenes_py import flat_body_scene
 from renderer.materials import material
 from renderer.scene.description import MaterialDesc
 from renderer.materials.subsurface import exit_normalisation_host
@@ -115,18 +116,6 @@ def test_exit_lobe_is_normalised():
     assert abs(transmitted / exit_normalisation_host(ETA) - 1.0) < 2e-3
 
 
-FLAT = """LookAt 0 5 0  0 0 0  0 0 1
-Camera "orthographic" "float screenwindow" [-0.5 0.5 -0.5 0.5]
-Film "rgb" "integer xresolution" [4] "integer yresolution" [4] "string filename" "x.exr"
-Sampler "independent" "integer pixelsamples" [64]
-Integrator "volpath" "integer maxdepth" [3]
-WorldBegin
-LightSource "infinite" "rgb L" [1 1 1]
-Material "subsurface" {params}
-Shape "trianglemesh" "point3 P" [-40 0 -40  40 0 -40  40 0 40  -40 0 40] "integer indices" [0 2 1 0 3 2]
-"""
-
-
 def test_flat_body_under_white_sky(tmp_path):
     """A smooth flat body seen from above under a white sky of radiance 1: the mirror reflection
     F(0) plus what enters, T = 1 − 2 FM1 of the sky's radiance per unit solid angle and cosine,
@@ -134,8 +123,8 @@ def test_flat_body_under_white_sky(tmp_path):
     leaves through Sw: L = F(0) + (1 − F(0)) R (1 − 2 FM1) / c. Tests the entry weight, the probe
     density and the exit lobe together."""
     refl = np.array([0.9, 0.5, 0.2])
-    (tmp_path / "flat.pbrt").write_text(FLAT.format(params=f'"rgb reflectance" [{refl[0]} {refl[1]} {refl[2]}] '
-                                                         '"rgb mfp" [0.2 0.1 0.05]'))
+    body = f'"rgb reflectance" [{refl[0]} {refl[1]} {refl[2]}] "rgb mfp" [0.2 0.1 0.05]'
+    (tmp_path / "flat.pbrt").write_text(flat_body_scene("subsurface", body))
     scene = renderer.load_scene(tmp_path / "flat.pbrt")
     img = renderer.render(scene, spp=1024, seed=3).reshape(-1, 3)
     f0 = float(bd.fresnel_dielectric(np.array(1.0), ETA))
@@ -157,7 +146,7 @@ def test_flat_body_under_white_sky(tmp_path):
     ('"rgb sigma_a" [1 1 1] "rgb sigma_s" [1 1 1] "rgb reflectance" [0.5 0.5 0.5]', 'reflectance unused'),
 ])
 def test_refused_as_pbrt_refuses(tmp_path, params, message):
-    (tmp_path / "bad.pbrt").write_text(FLAT.format(params=params))
+    (tmp_path / "bad.pbrt").write_text(flat_body_scene("subsurface", params))
     with pytest.raises(SceneError) as e:
         renderer.load_scene(tmp_path / "bad.pbrt")
     assert message in str(e.value) and "bad.pbrt:8" in str(e.value)
@@ -247,9 +236,9 @@ def test_upsampled_spectra_have_their_colour(rgb):
 def test_path_integrator_is_warned(tmp_path):
     """pbrt-v4's "path" integrator ignores BSSRDFs (its subsurface bodies are clear glass); the
     scene renders with subsurface scattering and says so at the Integrator's line."""
-    text = FLAT.format(params='"rgb reflectance" [0.5 0.5 0.5]').replace('"volpath"', '"path"')
+    text = flat_body_scene("subsurface", '"rgb reflectance" [0.5 0.5 0.5]', integrator="path")
     (tmp_path / "path.pbrt").write_text(text)
     warnings = renderer.load_scene(tmp_path / "path.pbrt").warnings
     assert any("path.pbrt:5" in w and "ignores" in w and "subsurface" in w for w in warnings), warnings
-    (tmp_path / "volpath.pbrt").write_text(FLAT.format(params='"rgb reflectance" [0.5 0.5 0.5]'))
+    (tmp_path / "volpath.pbrt").write_text(flat_body_scene("subsurface", '"rgb reflectance" [0.5 0.5 0.5]'))
     assert not any("ignores" in w for w in renderer.load_scene(tmp_path / "volpath.pbrt").warnings)

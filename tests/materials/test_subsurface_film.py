@@ -18,7 +18,7 @@ from renderer.color import spectral
 from renderer.materials import material
 from renderer.materials.beam_diffusion import fresnel_dielectric
 from renderer.materials.subsurface import exit_normalisation_host
-from scenes_py import single_object_scene
+from scenes_py import flat_body_scene, single_object_scene
 from subsurface_lobes import LOBES as SUBSURFACE_LOBES
 
 init_warp()
@@ -117,18 +117,6 @@ def test_absorbing_body_is_the_film_over_an_absorber():
     assert np.all(a.mean(0) > 0.02)          # the film reflects visibly
 
 
-FLAT = """LookAt 0 5 0  0 0 0  0 0 1
-Camera "orthographic" "float screenwindow" [-0.5 0.5 -0.5 0.5]
-Film "rgb" "integer xresolution" [4] "integer yresolution" [4] "string filename" "x.exr"
-Sampler "independent" "integer pixelsamples" [64]
-Integrator "volpath" "integer maxdepth" [3]
-WorldBegin
-LightSource "infinite" "rgb L" [1 1 1]
-Material "subsurface" {params}
-Shape "trianglemesh" "point3 P" [-40 0 -40  40 0 -40  40 0 40  -40 0 40] "integer indices" [0 2 1 0 3 2]
-"""
-
-
 @pytest.mark.parametrize("film", [SOAP, NACRE], ids=["soap", "nacre"])
 def test_flat_coated_body_under_white_sky(tmp_path, film):
     """A smooth flat coated body seen from above under a white sky (rgb3): the film's mirror
@@ -142,8 +130,8 @@ def test_flat_coated_body_under_white_sky(tmp_path, film):
                 f'[{" ".join(map(str, film["layer_thickness"]))}] "integer repeat" [{film["repeat"]}]')
     else:
         text = f'"float thickness" [{film["thickness"]}] "float eta_film" [{film["eta_film"]}]'
-    (tmp_path / "flat.pbrt").write_text(FLAT.format(params=f'"rgb reflectance" [{refl[0]} {refl[1]} {refl[2]}] '
-                                                         f'"rgb mfp" [0.2 0.1 0.05] {text}'))
+    body = f'"rgb reflectance" [{refl[0]} {refl[1]} {refl[2]}] "rgb mfp" [0.2 0.1 0.05] {text}'
+    (tmp_path / "flat.pbrt").write_text(flat_body_scene("subsurface", body))
     scene = renderer.load_scene(tmp_path / "flat.pbrt")
     img = renderer.render(scene, spp=1024, seed=3, thin_film="rgb3").reshape(-1, 3)
     r0, t0 = (x[0] for x in film_RT(film, np.array([1.0])))
@@ -177,7 +165,7 @@ def test_white_coated_body_in_a_white_furnace():
      'thickness belong to one film'),
 ])
 def test_bad_films_are_refused_with_their_line(tmp_path, params, message):
-    (tmp_path / "bad.pbrt").write_text(FLAT.format(params=params))
+    (tmp_path / "bad.pbrt").write_text(flat_body_scene("subsurface", params))
     with pytest.raises(renderer.errors.SceneError) as e:
         renderer.load_scene(tmp_path / "bad.pbrt")
     assert message in str(e.value) and "bad.pbrt:8" in str(e.value)
