@@ -44,14 +44,6 @@ from renderer.sampling.samplers import PixelSample, SamplerParams
 LAYERED = wp.constant(thinfilm.FLAG.layered)
 
 
-#: The material kinds whose shading kernels fit 128 registers under GPU_LAUNCH_BOUNDS with a frame
-#: within 1 KB (sm_90, docs/gpu.md "Register cap" and "The bump step"): the demo's conductor,
-#: dielectric and diffuse at 896-968 B, ar_coating's diffuse at 664 B, the beach's conductor and
-#: diffuse at 968 and 904 B now that its bump map is evaluated in the bump step (1,712 and 1,632 B
-#: before). The others keep up to 255 registers, as capped their spills overflow the frame: the
-#: thin film's (the beach's 1,744 B, its layered walk's 3,464 B) and disney's (the beach's 1,256 B).
-#: The bump step is capped too (the beach's: 128 registers, 432 B).
-CAPPED_KINDS = frozenset({"conductor", "dielectric", "diffuse"})
 
 
 class Shader(NamedTuple):
@@ -77,7 +69,8 @@ def shaders(features: Features) -> list[Shader]:
 
 def _kernel(f, capped: bool = False) -> wp.Kernel:
     """A render kernel in a module of its own (compiled, cached and measured alone); ``capped``: held
-    to 128 registers on CUDA."""
+    to 128 registers on CUDA (the kernels that would take more: bump, shading and lens steps, whose
+    frames under the cap are measured in docs/gpu.md)."""
     return wp.kernel(f, module="unique", module_options=KERNEL_OPTIONS,
                      launch_bounds=GPU_LAUNCH_BOUNDS if capped else None)
 
@@ -178,7 +171,7 @@ def shade_kernel(features: Features, independent: bool, shader: Shader) -> wp.Ke
         if sc.alive:
             push(paths, RAYS, i)
 
-    return _kernel(shade, kind in CAPPED_KINDS)
+    return _kernel(shade, capped=True)
 
 
 def lens_step(features: Features) -> bool:
@@ -222,7 +215,7 @@ def lens_kernel(features: Features) -> wp.Kernel:
         paths.L[i] = paths.L[i] + wp.cw_mul(paths.shadow_L[i], through_faces(scene, paths.shadow_o[i],
                                                                              paths.shadow_d[i], paths.shadow_t[i]))
 
-    return _kernel(lenses)
+    return _kernel(lenses, capped=True)
 
 
 @lru_cache(maxsize=None)
