@@ -148,8 +148,11 @@ def bump_kernel(features: Features) -> wp.Kernel:
 def shade_kernel(features: Features, independent: bool, shader: Shader) -> wp.Kernel:
     kind = shader.kind
     bumped = features.bump and not moves_vertex(features, kind)    # its normal from the bump step
-    # thin films apart from those that walk compile without the walk (their arithmetic is the same)
-    films = features if shader.walk or kind != thinfilm.NAME else dataclasses.replace(features, layered=False)
+    # thin films apart from those that walk compile without the walk, those that walk with nothing
+    # else (their arithmetic is the same)
+    films = features
+    if kind == thinfilm.NAME:
+        films = dataclasses.replace(features, **({"unlayered": False} if shader.walk else {"layered": False}))
     scatter = scatter_function(films, independent, kind, bumped)
     queue = FIRST_KIND + shaders(features).index(shader)
 

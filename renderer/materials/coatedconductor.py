@@ -14,6 +14,7 @@ import warp as wp
 
 from renderer.errors import Location, SceneError
 from renderer.materials.bsdf import BSDF, BSDFEval, BSDFSample
+from renderer.materials.coating import Coating
 from renderer.materials.conductor import COPPER_ETA, COPPER_K, artist_k, spectral_fresnel_rows
 from renderer.materials.layer_interfaces import CONDUCTOR, DIELECTRIC, Interface
 from renderer.materials.layered import FIRST_FREE_FLAG, SLAB_PARAMS, Slab, make_slab, walk, walk_flags
@@ -73,6 +74,7 @@ def _slab(b: BSDF) -> Slab:
     top.eta = wp.vec3(ieta)
     top.alpha = roughness_to_alpha(wp.vec2(b.p[_IU][0], b.p[_IV][0]), remap)
     base = Interface()
+    table = Coating()       # the base's spectral Fresnel table, if any
     base.kind = CONDUCTOR
     base.alpha = roughness_to_alpha(wp.vec2(b.p[_CU][0], b.p[_CV][0]), remap)
     if (b.flags & ARTIST) != 0:
@@ -81,9 +83,10 @@ def _slab(b: BSDF) -> Slab:
     else:
         base.eta = b.p[_CETA] / ieta
         base.k = b.p[_CK] / ieta
-        base.coat.layers = b.layers
-        base.coat.table_first = b.table_first
-    return make_slab(top, base, b.p[SLOT.thickness][0], b.p[SLOT.albedo], b.p[SLOT.g][0], b.flags, b.wavelength_u)
+        table.layers = b.layers
+        table.table_first = b.table_first
+    return make_slab(top, base, table, b.p[SLOT.thickness][0], b.p[SLOT.albedo], b.p[SLOT.g][0], b.flags,
+                     b.wavelength_u)
 
 
 _walk_eval_pdf, _walk_sample = walk(DIELECTRIC, CONDUCTOR)

@@ -8,6 +8,7 @@ import warp as wp
 
 from renderer.errors import Location
 from renderer.materials.bsdf import BSDF, BSDFEval, BSDFSample
+from renderer.materials.coating import Coating
 from renderer.materials.layer_interfaces import DIELECTRIC, LAMBERT, Interface
 from renderer.materials.layered import SLAB_PARAMS, Slab, make_slab, walk, walk_flags
 from renderer.materials.microfacet import REMAP_ROUGHNESS, resolve_roughness, roughness_params, roughness_to_alpha
@@ -39,7 +40,8 @@ def _slab(b: BSDF) -> Slab:
     base = Interface()
     base.kind = LAMBERT
     base.albedo = b.p[SLOT.reflectance]
-    return make_slab(top, base, b.p[SLOT.thickness][0], b.p[SLOT.albedo], b.p[SLOT.g][0], b.flags, b.wavelength_u)
+    return make_slab(top, base, Coating(), b.p[SLOT.thickness][0], b.p[SLOT.albedo], b.p[SLOT.g][0], b.flags,
+                     b.wavelength_u)
 
 
 _walk_eval_pdf, _walk_sample = walk(DIELECTRIC, LAMBERT)

@@ -28,21 +28,21 @@ class Interface:
     k: wp.vec3          # CONDUCTOR
     alpha: wp.vec2      # DIELECTRIC, CONDUCTOR, FILM: GGX roughness
     albedo: wp.vec3     # LAMBERT
-    coat: Coating       # FILM (its substrate must be clear); CONDUCTOR: its spectral Fresnel table at
-                        # coat.layers[coat.table_first] (0: the per-channel formula)
 
 
 # Interfaces, one kind at a time: each material's walk has a fixed top and bottom kind
-# (:func:`walk`), so a kernel compiles only the lobes of the kinds it walks between.
+# (:func:`walk`), so a kernel compiles only the lobes of the kinds it walks between. Each takes the
+# slab's one coating ``c`` beside its interface: a FILM's (its substrate must be clear), or a
+# CONDUCTOR's spectral Fresnel table at c.layers[c.table_first] (0: the per-channel formula).
 
 
 @wp.func
-def _dielectric_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
+def _dielectric_eval(s: Interface, c: Coating, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
     return dielectric_eval(s.eta[0], s.alpha, wo, wi, sides, radiance)
 
 
 @wp.func
-def _dielectric_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
+def _dielectric_sample(s: Interface, c: Coating, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
     return dielectric_sample(s.eta[0], s.alpha, wo, u, sides, radiance)
 
 
@@ -52,13 +52,13 @@ def _dielectric_specular(s: Interface) -> bool:
 
 
 @wp.func
-def _film_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
-    return coating_eval(s.coat, s.eta[0], s.alpha, wo, wi, sides, radiance)
+def _film_eval(s: Interface, c: Coating, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
+    return coating_eval(c, s.eta[0], s.alpha, wo, wi, sides, radiance)
 
 
 @wp.func
-def _film_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
-    return coating_sample(s.coat, s.eta[0], s.alpha, wo, u, sides, radiance)
+def _film_sample(s: Interface, c: Coating, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
+    return coating_sample(c, s.eta[0], s.alpha, wo, u, sides, radiance)
 
 
 @wp.func
@@ -67,14 +67,14 @@ def _rough_specular(s: Interface) -> bool:
 
 
 @wp.func
-def _smooth_film_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
+def _smooth_film_eval(s: Interface, c: Coating, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
     """A smooth coating's lobes are deltas: no value (``coating_eval`` at alpha 0)."""
     return BSDFEval()
 
 
 @wp.func
-def _smooth_film_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
-    return smooth_coating_sample(s.coat, s.eta[0], wo, u[2], sides, radiance)
+def _smooth_film_sample(s: Interface, c: Coating, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
+    return smooth_coating_sample(c, s.eta[0], wo, u[2], sides, radiance)
 
 
 @wp.func
@@ -83,14 +83,14 @@ def _specular(s: Interface) -> bool:
 
 
 @wp.func
-def _lambert_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
+def _lambert_eval(s: Interface, c: Coating, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
     if (sides & REFLECTION) == 0:
         return BSDFEval()
     return lambert_eval(s.albedo, wo, wi)
 
 
 @wp.func
-def _lambert_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
+def _lambert_sample(s: Interface, c: Coating, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
     if (sides & REFLECTION) == 0:
         return failed_sample()
     return lambert_sample(s.albedo, wo, u)
@@ -102,17 +102,17 @@ def _diffuse(s: Interface) -> bool:
 
 
 @wp.func
-def _conductor_eval(s: Interface, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
+def _conductor_eval(s: Interface, c: Coating, wo: wp.vec3, wi: wp.vec3, sides: int, radiance: bool) -> BSDFEval:
     if (sides & REFLECTION) == 0:
         return BSDFEval()
-    return conductor_eval(s.eta, s.k, s.alpha, wo, wi, s.coat.layers, s.coat.table_first)
+    return conductor_eval(s.eta, s.k, s.alpha, wo, wi, c.layers, c.table_first)
 
 
 @wp.func
-def _conductor_sample(s: Interface, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
+def _conductor_sample(s: Interface, c: Coating, wo: wp.vec3, u: wp.vec3, sides: int, radiance: bool) -> BSDFSample:
     if (sides & REFLECTION) == 0:
         return failed_sample()
-    return conductor_sample(s.eta, s.k, s.alpha, wo, u, s.coat.layers, s.coat.table_first)
+    return conductor_sample(s.eta, s.k, s.alpha, wo, u, c.layers, c.table_first)
 
 
 #: Per (kind, smooth) the interface's f and density restricted to ``sides`` (pbrt's

@@ -25,6 +25,11 @@ of the kinds its materials walk between, not of every kind. FILM is a thin film
 or multilayer stack (``thinfilm``'s coating, :mod:`.coating`) whose Fresnel term is an RGB R and T
 per direction: smooth, it reflects with probability mean(R) / (mean R + mean T); rough, it is the
 GGX pair with those R and T at the half-vector.
+
+On a GPU (docs/gpu.md, "The layered walk's kernels"): the slab carries one coating, not one per
+interface (only a FILM top or a CONDUCTOR base has one); the sample's density is estimated after
+the walk, not inside it; and the three estimators are inlined (``inline=True``) into their callers:
+out of line, each copied the slab into the stack frame and stacked its own frame on its caller's.
 """
 from __future__ import annotations
 
@@ -35,6 +40,7 @@ import warp as wp
 
 from renderer.materials.bsdf import (DIFFUSE, FIRST_DERIVED_FLAG, GLOSSY, REFLECTION, SPECULAR, TRANSMISSION,
                                      BSDFEval, BSDFSample, failed_sample)
+from renderer.materials.coating import Coating
 from renderer.materials.layer_interfaces import INTERFACES, LAMBERT, Interface
 from renderer.materials.phase import hg_phase, hg_sample
 from renderer.parameters import Parameter
@@ -74,6 +80,7 @@ def walk_flags(values: dict[str, Any]) -> int:
 class Slab:
     top: Interface
     bottom: Interface
+    coat: Coating       # the coating of the interface that has one (layer_interfaces): only one does
     thickness: float
     albedo: wp.vec3
     g: float
@@ -83,12 +90,13 @@ class Slab:
 
 
 @wp.func
-def make_slab(top: Interface, bottom: Interface, thickness: float, albedo: wp.vec3, g: float, flags: int,
-              seed: float) -> Slab:
+def make_slab(top: Interface, bottom: Interface, coat: Coating, thickness: float, albedo: wp.vec3, g: float,
+              flags: int, seed: float) -> Slab:
     """A slab from a material's evaluated parameters; ``flags`` carry the walk's integers (walk_flags)."""
     L = Slab()
     L.top = top
     L.bottom = bottom
+    L.coat = coat
     L.thickness = thickness
     L.albedo = wp.min(wp.max(albedo, wp.vec3(0.0)), wp.vec3(1.0))
     L.g = wp.clamp(g, -1.0, 1.0)
@@ -161,9 +169,9 @@ def walk(top: int, bottom: int, top_smooth: bool = False) -> tuple[wp.Function, 
         picks the inside direction w: the MIS partner of a walk vertex that continues along w. pbrt
         uses the top's density of wi given -w here instead, a different measure, so its weights do
         not sum to 1 and its f runs some 5-10 % above its own sampling for rough coats."""
-        return wp.static(top_f)(L.top, wi, -w, TRANSMISSION, False).pdf
+        return wp.static(top_f)(L.top, L.coat, wi, -w, TRANSMISSION, False).pdf
 
-    @wp.func
+    @wp.func(inline=True)
     def layered_f(L: Slab, wo_in: wp.vec3, wi_in: wp.vec3) -> wp.vec3:
         """pbrt's stochastic estimate of f(wo, wi) (see the module docstring), for an opaque base:
         light leaves through the top, so wi below wo's side gives 0."""
@@ -177,12 +185,12 @@ def walk(top: int, bottom: int, top_smooth: bool = False) -> tuple[wp.Function, 
         top_specular = wp.static(top_delta)(L.top)
         base_specular = wp.static(base_delta)(L.bottom)
         scatters = max3(L.albedo) > 0.0
-        f = wp.static(top_f)(L.top, wo, wi, BOTH, True).f * float(n)
+        f = wp.static(top_f)(L.top, L.coat, wo, wi, BOTH, True).f * float(n)
         rng = walk_rng(wo, wi, L.seed)
         for _s in range(n):
-            wos = wp.static(top_sample)(L.top, wo,
+            wos = wp.static(top_sample)(L.top, L.coat, wo,
                                         wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)), TRANSMISSION, True)
-            wis = wp.static(top_sample)(L.top, wi,
+            wis = wp.static(top_sample)(L.top, L.coat, wi,
                                         wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)), TRANSMISSION, False)
             if _ok(wos) and _ok(wis):
                 beta = wos.weight
@@ -218,7 +226,7 @@ def walk(top: int, bottom: int, top_smooth: bool = False) -> tuple[wp.Function, 
                             w = wn
                             z = zp
                             if w[2] > 0.0 and not top_specular:
-                                ex = wp.static(top_f)(L.top, -w, wi, TRANSMISSION, True)
+                                ex = wp.static(top_f)(L.top, L.coat, -w, wi, TRANSMISSION, True)
                                 if max3(ex.f) > 0.0:
                                     wt = power_heuristic(p_phase, wp.static(exit_pdf)(L, wi, w))
                                     f += wp.cw_mul(beta, ex.f) * (_tr(zp - thick, w) * wt)
@@ -226,7 +234,7 @@ def walk(top: int, bottom: int, top_smooth: bool = False) -> tuple[wp.Function, 
                         z = wp.clamp(zp, 0.0, thick)
                     if z == thick:
                         # internal reflection at the top
-                        bs = wp.static(top_sample)(L.top, -w,
+                        bs = wp.static(top_sample)(L.top, L.coat, -w,
                                                    wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)),
                                                    REFLECTION, True)
                         if not _ok(bs):
@@ -236,12 +244,12 @@ def walk(top: int, bottom: int, top_smooth: bool = False) -> tuple[wp.Function, 
                     else:
                         # the base: connect to the exit direction, then reflect
                         if not base_specular:
-                            eb = wp.static(base_f)(L.bottom, -w, -wis.wi, BOTH, True)
+                            eb = wp.static(base_f)(L.bottom, L.coat, -w, -wis.wi, BOTH, True)
                             wt = float(1.0)
                             if not top_specular:
                                 wt = power_heuristic(wis.pdf, eb.pdf)
                             f += wp.cw_mul(wp.cw_mul(beta, eb.f), wis.weight) * (wt * _tr(thick, wis.wi))
-                        bs = wp.static(base_sample)(L.bottom, -w,
+                        bs = wp.static(base_sample)(L.bottom, L.coat, -w,
                                                     wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)),
                                                     REFLECTION, True)
                         if not _ok(bs):
@@ -249,7 +257,7 @@ def walk(top: int, bottom: int, top_smooth: bool = False) -> tuple[wp.Function, 
                         beta = wp.cw_mul(beta, bs.weight)
                         w = bs.wi
                         if not top_specular:
-                            ex = wp.static(top_f)(L.top, -w, wi, TRANSMISSION, True)
+                            ex = wp.static(top_f)(L.top, L.coat, -w, wi, TRANSMISSION, True)
                             if max3(ex.f) > 0.0:
                                 wt = float(1.0)
                                 if not base_specular:
@@ -257,7 +265,7 @@ def walk(top: int, bottom: int, top_smooth: bool = False) -> tuple[wp.Function, 
                                 f += wp.cw_mul(beta, ex.f) * (_tr(thick, bs.wi) * wt)
         return f / float(n)
 
-    @wp.func
+    @wp.func(inline=True)
     def layered_pdf(L: Slab, wo_in: wp.vec3, wi_in: wp.vec3) -> float:
         """pbrt's approximate density of ``layered_sample`` at wi: the top's reflection lobe plus one
         transmit-reflect-transmit bounce (MIS-combined when both interfaces are rough), mixed with a
@@ -268,44 +276,43 @@ def walk(top: int, bottom: int, top_smooth: bool = False) -> tuple[wp.Function, 
         n = wp.max(L.n_samples, 1)
         total = float(0.0)
         if wo[2] * wi[2] > 0.0:
-            total = wp.static(top_f)(L.top, wo, wi, REFLECTION, True).pdf * float(n)
+            total = wp.static(top_f)(L.top, L.coat, wo, wi, REFLECTION, True).pdf * float(n)
             top_specular = wp.static(top_delta)(L.top)
             base_specular = wp.static(base_delta)(L.bottom)
             rng = walk_rng(wi, wo, L.seed)
             for _s in range(n):
-                wos = wp.static(top_sample)(L.top, wo,
+                wos = wp.static(top_sample)(L.top, L.coat, wo,
                                             wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)), TRANSMISSION, True)
-                wis = wp.static(top_sample)(L.top, wi,
+                wis = wp.static(top_sample)(L.top, L.coat, wi,
                                             wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)), TRANSMISSION, False)
                 if wos.pdf > 0.0 and max3(wos.weight) > 0.0 and wis.pdf > 0.0 and max3(wis.weight) > 0.0:
                     if top_specular:
-                        total += wp.static(base_f)(L.bottom, -wos.wi, -wis.wi, BOTH, True).pdf
+                        total += wp.static(base_f)(L.bottom, L.coat, -wos.wi, -wis.wi, BOTH, True).pdf
                     else:
-                        rs = wp.static(base_sample)(L.bottom, -wos.wi,
+                        rs = wp.static(base_sample)(L.bottom, L.coat, -wos.wi,
                                                     wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng)), BOTH, True)
                         if rs.pdf > 0.0 and max3(rs.weight) > 0.0:
                             if base_specular:
-                                total += wp.static(top_f)(L.top, -rs.wi, wi, BOTH, True).pdf
+                                total += wp.static(top_f)(L.top, L.coat, -rs.wi, wi, BOTH, True).pdf
                             else:
-                                p_r = wp.static(base_f)(L.bottom, -wos.wi, -wis.wi, BOTH, True).pdf
+                                p_r = wp.static(base_f)(L.bottom, L.coat, -wos.wi, -wis.wi, BOTH, True).pdf
                                 total += power_heuristic(wis.pdf, p_r) * p_r
-                                p_t = wp.static(top_f)(L.top, -rs.wi, wi, BOTH, True).pdf
+                                p_t = wp.static(top_f)(L.top, L.coat, -rs.wi, wi, BOTH, True).pdf
                                 total += power_heuristic(rs.pdf, p_t) * p_t
         return 0.1 / (4.0 * PI) + 0.9 * total / float(n)
 
-    @wp.func
-    def layered_sample(L: Slab, wo_in: wp.vec3, u: wp.vec3) -> BSDFSample:
+    @wp.func(inline=True)
+    def walk_out(L: Slab, wo_in: wp.vec3, u: wp.vec3) -> BSDFSample:
         """pbrt's random walk: reflect off the top, or refract in and walk until the path leaves
-        through the top (or is absorbed, ends by roulette or reaches max_depth: a failed sample)."""
+        through the top (or is absorbed, ends by roulette or reaches max_depth: a failed sample).
+        A sample that is not specular has no density yet (see ``layered_sample``)."""
         sgn = _up(wo_in)
         wo = wo_in * sgn
-        bs = wp.static(top_sample)(L.top, wo, u, BOTH, True)
+        bs = wp.static(top_sample)(L.top, L.coat, wo, u, BOTH, True)
         if not _ok(bs):
             return failed_sample()
         if bs.wi[2] > 0.0:
             bs.wi = bs.wi * sgn
-            if (bs.flags & SPECULAR) == 0:
-                bs.pdf = wp.static(layered_pdf)(L, wo_in, bs.wi)
             return bs
         thick = wp.max(L.thickness, MIN_THICKNESS)
         scatters = max3(L.albedo) > 0.0
@@ -346,9 +353,9 @@ def walk(top: int, bottom: int, top_smooth: bool = False) -> tuple[wp.Function, 
                 u3 = wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng))
                 s = BSDFSample()
                 if z == thick:
-                    s = wp.static(top_sample)(L.top, -w, u3, BOTH, True)
+                    s = wp.static(top_sample)(L.top, L.coat, -w, u3, BOTH, True)
                 else:
-                    s = wp.static(base_sample)(L.bottom, -w, u3, BOTH, True)
+                    s = wp.static(base_sample)(L.bottom, L.coat, -w, u3, BOTH, True)
                 if not _ok(s):
                     return failed_sample()
                 beta = wp.cw_mul(beta, s.weight)
@@ -360,10 +367,17 @@ def walk(top: int, bottom: int, top_smooth: bool = False) -> tuple[wp.Function, 
                     out.weight = beta
                     out.flags = _walk_flags(L, specular)
                     out.pdf = 1.0
-                    if not specular:
-                        out.pdf = wp.static(layered_pdf)(L, wo_in, out.wi)
                     return out
         return failed_sample()
+
+    @wp.func
+    def layered_sample(L: Slab, wo_in: wp.vec3, u: wp.vec3) -> BSDFSample:
+        """The walk's sample with ``layered_pdf``'s density when it is not specular, estimated after
+        the walk rather than inside it: on a GPU the two then do not nest on the stack."""
+        s = wp.static(walk_out)(L, wo_in, u)
+        if s.pdf > 0.0 and (s.flags & SPECULAR) == 0:
+            s.pdf = wp.static(layered_pdf)(L, wo_in, s.wi)
+        return s
 
     @wp.func
     def layered_eval_pdf(L: Slab, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:

@@ -20,9 +20,8 @@ observer (``spectral:N``, the render option). Lobes:
   f = reflectance (1 − R(wo)) (1 − R(wi)) / π: light must cross the film on the way in and on
   the way out, which keeps it reciprocal and energy conserving (R + (1 − R)·reflectance ≤ 1);
   light the film reflects back down into the substrate is dropped (a slight darkening).
-* ``layered`` true: the same opaque substrate with every interreflection, by pbrt-v4's layered
-  random walk (:mod:`.layered`) with the coating as its top interface (kind FILM) over the
-  Lambertian base, no medium between them; ``maxdepth`` and ``nsamples`` are the walk's.
+* ``layered`` true: every interreflection between the coating (kind FILM) and that Lambertian base, by
+  pbrt-v4's layered random walk (:mod:`.layered`; no medium between them), of ``maxdepth`` and ``nsamples``.
 * ``tint`` (clear substrate): Beer–Lambert in a thin parallel slab, tint being the transmittance
   of one pass at normal incidence; each vertex charges tint^(1/(2|cos θ|)) for each of wo and wi
   that lies inside, so a pass in and out pays tint^(1/cos θ) and the BSDF stays reciprocal.
@@ -101,8 +100,7 @@ def resolve(values: dict[str, Any], loc: Location | None) -> tuple[dict[str, Any
                          '"layered", roughness or displacement', loc)
     walk = [n for n in ("maxdepth", "nsamples") if n in values]
     if walk and not values.get("layered"):
-        raise SceneError(f'thinfilm: {" and ".join(walk)} belong to the layered walk, which needs "layered" true',
-                         loc)
+        raise SceneError(f'thinfilm: {" and ".join(walk)} belong to the layered walk: it needs "layered" true', loc)
     flags = walk_flags(values) if values.get("layered") else 0
     return resolve_roughness(resolve_stack(values, loc)), flags
 
@@ -202,17 +200,15 @@ def slab_face_transmittance(b: BSDF, cos_d: float) -> wp.vec3:
 
 @wp.func
 def _slab(b: BSDF) -> Slab:
-    """The layered walk's slab: the coating on top, the Lambertian base right under the clear
-    substrate (no medium between them: optical thickness 0)."""
+    """The walk's slab: the coating over the Lambertian base right under its clear substrate (thickness 0)."""
     top = Interface()
     top.kind = FILM
     top.eta = wp.vec3(_eta(b))
     top.alpha = _alpha(b)
-    top.coat = film_coating(b)
     base = Interface()
     base.kind = LAMBERT
     base.albedo = b.p[SLOT.reflectance]
-    return make_slab(top, base, 0.0, wp.vec3(0.0), 0.0, b.flags, b.wavelength_u)
+    return make_slab(top, base, film_coating(b), 0.0, wp.vec3(0.0), 0.0, b.flags, b.wavelength_u)
 
 
 @wp.func
@@ -394,6 +390,22 @@ def _rough_lobes(multiscatter: bool) -> tuple[wp.Function, wp.Function]:
 
 
 @lru_cache(maxsize=None)
+def _walk_lobes(rough: bool) -> tuple[wp.Function, wp.Function]:
+    """``eval_pdf`` and ``sample`` of a kernel whose every thin film walks: the walk and no other lobe."""
+    walk_eval_pdf, walk_sample = walk(FILM, LAMBERT, not rough)
+
+    @wp.func
+    def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+        return wp.static(walk_eval_pdf)(_slab(b), wo, wi)
+
+    @wp.func
+    def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+        return wp.static(walk_sample)(_slab(b), wo, u)
+
+    return eval_pdf, sample
+
+
+@lru_cache(maxsize=None)
 def _lobes(rough: bool, multiscatter: bool, layered: bool) -> tuple[wp.Function, wp.Function]:
     """``eval_pdf`` and ``sample`` compiling only what a kernel's thin films can reach: the GGX lobes
     (``rough``), their compensation (``multiscatter``), the layered walk (``layered``)."""
@@ -432,5 +444,7 @@ eval_pdf, sample = _lobes(True, True, True)
 
 
 def specialised(features: Any) -> tuple[wp.Function, wp.Function]:
-    """``eval_pdf`` and ``sample`` with only the lobes a kernel of ``features`` can reach."""
+    """``eval_pdf`` and ``sample`` with only the lobes a kernel of ``features`` can reach (all films walk: the walk)."""
+    if features.layered and not features.unlayered:
+        return _walk_lobes(NAME not in features.smooth)
     return _lobes(NAME not in features.smooth, features.multiscatter, features.layered)
