@@ -105,7 +105,7 @@ class RenderSession:
         self.film = Film(W, H, device)
         self.sampler = upload_sampler(settings.sampler, W, H, device)
         independent = settings.sampler.name == "independent"
-        self.wavefront = use_wavefront(device, wavefront, self.ds.features.media)   # the same image either way
+        self.wavefront = use_wavefront(device, wavefront)   # the same image either way
         kernels = render_kernels(self.ds.features, independent, aov, wavefront=self.wavefront)
         self.kernel = kernels.get("path")
         t0 = time.perf_counter()

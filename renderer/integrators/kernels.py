@@ -4,7 +4,7 @@
 Two integrators compute the same image: the megakernel (:mod:`renderer.integrators.path`, one
 kernel, fastest on the CPU) and the wavefront (:mod:`renderer.integrators.wavefront`, small kernels
 that fit a GPU's registers). CUDA devices use the wavefront and the CPU the megakernel unless
-asked otherwise; scenes with participating media use the megakernel, which alone tracks them."""
+asked otherwise."""
 from __future__ import annotations
 
 import warp as wp
@@ -12,17 +12,8 @@ import warp as wp
 from renderer.device.scene import Features
 
 
-def use_wavefront(device: str, wavefront: bool | None, media: bool) -> bool:
-    """Whether a render on ``device`` runs the wavefront: as asked, else on CUDA devices only; never
-    for a scene with ``media`` (``Features.media``, :func:`renderer.device.scene.uses_media`;
-    asking for it then is an error)."""
-    if media:
-        if wavefront:
-            from renderer.errors import RenderError
-
-            raise RenderError("the wavefront integrator does not track participating media yet: "
-                              "render this scene with --no-wavefront (the megakernel)")
-        return False
+def use_wavefront(device: str, wavefront: bool | None) -> bool:
+    """Whether a render on ``device`` runs the wavefront: as asked, else on CUDA devices only."""
     return device.startswith("cuda") if wavefront is None else bool(wavefront)
 
 
