@@ -212,7 +212,7 @@ class RenderSession:
         launched over the passes' row chunks and threads."""
         from renderer.integrators.aov import render_aovs
 
-        return render_aovs(self.ds, self.settings.seed, n_samples, self.chunks, self.threads)
+        return render_aovs(self.ds, self.settings.seed, n_samples, self.chunks, self.threads, steps=self.wavefront)
 
     # ---- checkpoints ----------------------------------------------------------------------
 

@@ -21,9 +21,10 @@ def render_kernels(features: Features, independent: bool, aov: bool = False,
                    wavefront: bool = False) -> dict[str, wp.Kernel]:
     """By name: the path kernel of ``features`` (its ``independent``-sampler variant or not), or
     with ``wavefront`` the wavefront's kernels in launch order; the film's accumulation and, with
-    ``aov`` (``--aov`` or ``--denoise``), the AOV kernel."""
+    ``aov`` (``--aov`` or ``--denoise``), the AOV kernel (with ``wavefront``, the AOV pass's steps)."""
     from renderer.device.film import accumulate
     from renderer.integrators.aov import aov_kernel
+    from renderer.integrators.aov_steps import aov_step_kernels
     from renderer.integrators.path import integrator_kernel
     from renderer.integrators.wavefront import wavefront_kernels
 
@@ -32,6 +33,8 @@ def render_kernels(features: Features, independent: bool, aov: bool = False,
     else:
         kernels = {"path": integrator_kernel(features, independent)}
     kernels["film"] = accumulate
-    if aov:
+    if aov and wavefront:
+        kernels.update(aov_step_kernels(features))
+    elif aov:
         kernels["aov"] = aov_kernel(features)
     return kernels

@@ -71,12 +71,52 @@ def shaders(features: Features) -> list[Shader]:
     return out
 
 
-def _kernel(f, capped: bool = False) -> wp.Kernel:
+def step_kernel(f, capped: bool = False) -> wp.Kernel:
     """A render kernel in a module of its own (compiled, cached and measured alone); ``capped``: held
     to 128 registers on CUDA (the kernels that would take more: bump, shading and lens steps, whose
     frames under the cap are measured in docs/gpu.md)."""
     return wp.kernel(f, module="unique", module_options=KERNEL_OPTIONS,
                      launch_bounds=GPU_LAUNCH_BOUNDS if capped else None)
+
+
+def shader_features(features: Features, shader: Shader) -> Features:
+    """What a shader's kernel compiles: thin films apart from those that walk without the walk
+    (their arithmetic is the same)."""
+    if shader.walk or shader.kind != thinfilm.NAME:
+        return features
+    return dataclasses.replace(features, layered=False)
+
+
+def queues_of_kinds(shader_names: list[str], first: int = FIRST_KIND) -> list[int]:
+    """Per material kind id, its first queue (-1: none), for kernels named ``<step>_<kind>[_walk]``
+    in queue order (``shaders``) from queue ``first`` on: ``queue_chooser`` sends walking films to
+    their second queue."""
+    queue_of_kind = [-1] * len(REGISTRY)
+    for q, name in enumerate(shader_names):
+        k = kind_id(name.split("_", 1)[1].removesuffix("_walk"))
+        if queue_of_kind[k] < 0:
+            queue_of_kind[k] = first + q
+    return queue_of_kind
+
+
+@lru_cache(maxsize=None)
+def queue_chooser(features: Features, first: int = FIRST_KIND) -> wp.Function:
+    """``shading_queue(scene, queue_of_kind, m) -> int``: the queue of the shader of material m
+    (its kind's; thin films that walk have their own when the scene has both kinds of film), the
+    shaders' queues counted from ``first``."""
+    walks = [first + q for q, sh in enumerate(shaders(features)) if sh.name.endswith("_walk")]
+    walk_queue = walks[0] if walks else -1
+
+    @wp.func
+    def shading_queue(scene: Scene, queue_of_kind: wp.array(dtype=int), m: int) -> int:
+        kind = scene.mat.kind[m]
+        queue = queue_of_kind[kind]
+        if wp.static(walk_queue >= 0):
+            if kind == THINFILM and (scene.mat.flags[m] & LAYERED) != 0:
+                queue = walk_queue
+        return queue
+
+    return shading_queue
 
 
 @lru_cache(maxsize=None)
@@ -96,7 +136,7 @@ def start_kernel(features: Features, independent: bool) -> wp.Kernel:
             paths.media[i] = start_medium(scene, seed, sample_index, pixel)
         paths.queue[RAYS, i] = i        # every path traces its camera ray (the host knows the count)
 
-    return _kernel(start_paths)
+    return step_kernel(start_paths)
 
 
 @lru_cache(maxsize=None)
@@ -108,7 +148,7 @@ def intersect_kernel(features: Features) -> wp.Kernel:
         paths.hit[i] = closest(scene, paths.o[i], paths.d[i], 1.0e30)
         paths.rays[i] = paths.rays[i] + 1
 
-    return _kernel(intersect)
+    return step_kernel(intersect)
 
 
 @lru_cache(maxsize=None)
@@ -116,8 +156,7 @@ def hits_kernel(features: Features) -> wp.Kernel:
     arrive = path_functions(features, False).arrive     # does not draw numbers: one variant serves both
 
     bump = features.bump
-    walks = [FIRST_KIND + q for q, sh in enumerate(shaders(features)) if sh.name.endswith("_walk")]
-    walk_queue = walks[0] if walks else -1      # thin films that walk, apart from the others
+    shading_queue = queue_chooser(features)
     media = features.media
     arrivals = ARRIVED if media else RAYS       # with media, the rays the medium step let through
 
@@ -142,17 +181,12 @@ def hits_kernel(features: Features) -> wp.Kernel:
                     return
         if ar.shade:
             paths.material[i] = ar.m
-            kind = scene.mat.kind[ar.m]
-            queue = paths.queue_of_kind[kind]
-            if wp.static(walk_queue >= 0):
-                if kind == THINFILM and (scene.mat.flags[ar.m] & LAYERED) != 0:
-                    queue = walk_queue
-            push(paths, queue, i)
+            push(paths, shading_queue(scene, paths.queue_of_kind, ar.m), i)
             if wp.static(bump):
                 if scene.mat.bump[ar.m] >= 0:
                     push(paths, BUMPS, i)
 
-    return _kernel(hits)
+    return step_kernel(hits)
 
 
 @lru_cache(maxsize=None)
@@ -191,7 +225,7 @@ def medium_kernel(features: Features) -> wp.Kernel:
         store_path(paths, i, st)
         paths.media[i] = ms
 
-    return _kernel(medium, capped=True)
+    return step_kernel(medium, capped=True)
 
 
 @lru_cache(maxsize=None)
@@ -205,16 +239,14 @@ def bump_kernel(features: Features) -> wp.Kernel:
         s = surface_at(scene.geo, hit, scene.shape_flip[scene.geo.inst_shape[hit.inst]] != 0)
         paths.ns[i] = bump_normal(scene, scene.mat.bump[paths.material[i]], s, s.ns)
 
-    return _kernel(bump, capped=True)
+    return step_kernel(bump, capped=True)
 
 
 @lru_cache(maxsize=None)
 def shade_kernel(features: Features, independent: bool, shader: Shader) -> wp.Kernel:
     kind = shader.kind
     bumped = features.bump and not moves_vertex(features, kind)    # its normal from the bump step
-    # thin films apart from those that walk compile without the walk (their arithmetic is the same)
-    films = features if shader.walk or kind != thinfilm.NAME else dataclasses.replace(features, layered=False)
-    scatter = scatter_function(films, independent, kind, bumped)
+    scatter = scatter_function(shader_features(features, shader), independent, kind, bumped)
     queue = FIRST_KIND + shaders(features).index(shader)
     media = features.media
 
@@ -247,7 +279,7 @@ def shade_kernel(features: Features, independent: bool, shader: Shader) -> wp.Ke
         if sc.alive:
             push(paths, RAYS, i)
 
-    return _kernel(shade, capped=True)
+    return step_kernel(shade, capped=True)
 
 
 def lens_step(features: Features) -> bool:
@@ -287,7 +319,7 @@ def shadow_kernel(features: Features) -> wp.Kernel:
         elif not blocked(scene, paths.shadow_o[i], paths.shadow_d[i], paths.shadow_t[i]):
             paths.L[i] = paths.L[i] + paths.shadow_L[i]
 
-    return _kernel(shadow, capped=media)     # ratio tracking through media: 150 registers uncapped
+    return step_kernel(shadow, capped=media)     # ratio tracking through media: 150 registers uncapped
 
 
 @lru_cache(maxsize=None)
@@ -301,7 +333,7 @@ def lens_kernel(features: Features) -> wp.Kernel:
         paths.L[i] = paths.L[i] + wp.cw_mul(paths.shadow_L[i], through_faces(scene, paths.shadow_o[i],
                                                                              paths.shadow_d[i], paths.shadow_t[i]))
 
-    return _kernel(lenses, capped=True)
+    return step_kernel(lenses, capped=True)
 
 
 @lru_cache(maxsize=None)
@@ -313,7 +345,7 @@ def finish_kernel(features: Features) -> wp.Kernel:
         i = wp.tid()
         record(scene, load_path(paths, i), row_offset * scene.cam.width + i, film, bad_samples, ray_count)
 
-    return _kernel(finish)
+    return step_kernel(finish)
 
 
 def wavefront_kernels(features: Features, independent: bool) -> dict[str, wp.Kernel]:
@@ -346,12 +378,8 @@ class Wavefront:
 
     def __post_init__(self) -> None:
         names = [name for name in self.kernels if name.startswith("shade_")]     # in queue order (``shaders``)
-        queue_of_kind = [-1] * len(REGISTRY)
-        for q, name in enumerate(names):
-            k = kind_id(name.removeprefix("shade_").removesuffix("_walk"))
-            if queue_of_kind[k] < 0:        # a kind's first queue; hits sends walking films to the second
-                queue_of_kind[k] = FIRST_KIND + q
-        self.buffers = [path_buffers(self.max_paths, not self.independent, queue_of_kind, len(names), self.device,
+        self.buffers = [path_buffers(self.max_paths, not self.independent, queues_of_kinds(names), len(names),
+                                     self.device,
                                      "bump" in self.kernels, "medium" in self.kernels) for _ in range(self.slots)]
         self.shaders = [self.kernels[name] for name in names]
 
