@@ -326,7 +326,7 @@ def shadow_kernel(features: Features) -> wp.Kernel:
 def lens_kernel(features: Features) -> wp.Kernel:
     """The lens step: shadow rays that meet only thin slabs' faces, traced face by face (the
     megakernel's ``transmitted`` past its any-hit pass), off the ordinary shadow kernel."""
-    through_faces = face_walk(ray_queries(features).closest)
+    through_faces = face_walk(ray_queries(features).closest, own_kernel=True)
 
     def lenses(scene: Scene, paths: PathBuffers):
         i = paths.queue[LENSES, wp.tid()]

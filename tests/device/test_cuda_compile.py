@@ -132,16 +132,18 @@ def test_bump_and_lens_steps_fit_the_target():
     under the register cap, and a scene with thin lenses traces their faces in the lens step, so its
     shadow kernel stays the plain any-hit query's size (with the faces' walk inside it the beach's
     was 215 registers and a 912 B frame: docs/gpu.md, "The bump step, the lens step and the walk's
-    own kernel")."""
+    own kernel"). The lens step fits too, with the coating's optics inlined into it (out of line, the
+    beach's frame was 1,200 B: docs/gpu.md, "The lens step and the thin film's coating")."""
     from renderer.api import load_scene
     from renderer.device.scene import upload
-    from renderer.integrators.wavefront import bump_kernel, shadow_kernel
+    from renderer.integrators.wavefront import bump_kernel, lens_kernel, shadow_kernel
 
     data = ROOT / "tests" / "data" / "pbrt"
     bumped = upload(load_scene(data / "films_walk.pbrt"), "cpu", 8, 8).features
     lenses = upload(load_scene(data / "thin_slab_shadow.pbrt"), "cpu", 8, 8).features
     assert bumped.bump and lenses.thin_slabs
-    for row in compile_kernels({"bump": bump_kernel(bumped), "shadow": shadow_kernel(lenses)}, [90]):
+    kernels = {"bump": bump_kernel(bumped), "shadow": shadow_kernel(lenses), "lenses": lens_kernel(lenses)}
+    for row in compile_kernels(kernels, [90]):
         assert row.resources.registers <= TARGET.registers, (row.name, row.resources)
         assert row.resources.stack_bytes <= TARGET.stack_bytes, (row.name, row.resources)
 
