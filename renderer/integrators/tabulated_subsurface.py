@@ -15,9 +15,9 @@ import warp as wp
 
 from renderer.color.spectral import LAMBDA_MAX_NM, LAMBDA_MIN_NM
 from renderer.device.scene import Features, Scene
-from renderer.geometry.intersect import Surface, surface_at
-from renderer.integrators.subsurface import (P_NORMAL, SUBSURFACE, SubsurfaceStep, _identity, probe_axes,
-                                             probe_chord, subsurface_scatter)
+from renderer.geometry.intersect import Surface
+from renderer.integrators.subsurface import (P_NORMAL, SUBSURFACE, SubsurfaceStep, _identity, exit_surface,
+                                             probe_axes, probe_chord, subsurface_scatter)
 from renderer.materials import dielectric, disney
 from renderer.materials import subsurface as pbrt_subsurface
 from renderer.materials.beam_diffusion import N_ROWS
@@ -263,8 +263,7 @@ def tabulated_scatter(coated: bool) -> wp.Function:
         if probe.found == 0:
             ev.weight = wp.vec3(0.0)
             return ev
-        shape_i = scene.geo.inst_shape[probe.chosen.inst]
-        si = surface_at(scene.geo, probe.chosen, scene.shape_flip[shape_i] != 0)
+        si = exit_surface(scene, probe.chosen)
         delta = si.p - s.p
         pdf = _tabulated_pdf(b, m, delta, f.s, f.t, f.n, si.ng)
         if pdf <= 0.0:
@@ -282,6 +281,7 @@ def tabulated_scatter(coated: bool) -> wp.Function:
         else:
             ev.weight = m.to_rgb * sp * (w_in[0] * float(probe.found) / (q * pdf))
         ev.s = si
+        ev.exit = probe.chosen
         ev.b.flags = b.flags | pbrt_subsurface.EXIT
         ev.wo = si.ns
         return ev

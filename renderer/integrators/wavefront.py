@@ -7,7 +7,9 @@ hits), ``hits`` (light that escaped or was hit, the end at the maximum depth, mi
 the material that shades), ``bump`` in scenes with bump maps (the bump-mapped shading normal of
 the paths whose material has one, so the shading kernels hold no texture program for it), one
 ``shade_<kind>`` per material kind of the scene (a vertex of that kind: its BSDF, dispersion,
-subsurface, the light sample's shadow ray and the BSDF sample that continues the path),
+the light sample's shadow ray and the BSDF sample that continues the path), each after a
+``probe_<kind>`` for the kinds whose vertex subsurface scattering may move (the subsurface step
+and its probe rays through the BVH, so the shading kernel holds no BVH traversal),
 ``shadow`` (the shadow rays, and what they let through) and ``lenses`` in scenes with thin slabs
 (the shadow rays that meet only thin slabs' faces, traced face by face), until no path goes on;
 then ``finish`` (the film, dropped samples and ray counts as the megakernel writes them).
@@ -35,7 +37,8 @@ from renderer.integrators.path_state import (BUMPS, FIRST_KIND, LENSES, RAYS, SH
                                              path_buffers, push, push_shadow, store_path)
 from renderer.integrators.shading import bump_normal
 from renderer.integrators.thin_slab import SLABS_ONLY, THINFILM, crossing, crossing_transmittance, face_walk
-from renderer.integrators.vertex import moves_vertex, path_functions, scatter_function
+from renderer.integrators.subsurface import Exit, exit_of
+from renderer.integrators.vertex import moves_vertex, path_functions, probe_function, scatter_function
 from renderer.integrators.visibility import ray_queries
 from renderer.materials import REGISTRY, kind_id, thinfilm
 from renderer.sampling.samplers import PixelSample, SamplerParams
@@ -147,10 +150,11 @@ def bump_kernel(features: Features) -> wp.Kernel:
 @lru_cache(maxsize=None)
 def shade_kernel(features: Features, independent: bool, shader: Shader) -> wp.Kernel:
     kind = shader.kind
-    bumped = features.bump and not moves_vertex(features, kind)    # its normal from the bump step
+    probed = moves_vertex(features, kind)       # the probe step moved its vertex
+    bumped = features.bump and not probed       # its normal from the bump step
     # thin films apart from those that walk compile without the walk (their arithmetic is the same)
     films = features if shader.walk or kind != thinfilm.NAME else dataclasses.replace(features, layered=False)
-    scatter = scatter_function(films, independent, kind, bumped)
+    scatter = scatter_function(films, independent, kind, bumped, probed)
     queue = FIRST_KIND + shaders(features).index(shader)
 
     def shade(scene: Scene, smp: SamplerParams, paths: PathBuffers, rr_depth: int):
@@ -164,7 +168,10 @@ def shade_kernel(features: Features, independent: bool, shader: Shader) -> wp.Ke
         ps = PixelSample()
         if wp.static(not independent):
             ps = paths.sample[i]
-        sc = scatter(scene, smp, ps, load_path(paths, i), hit, s, m, rr_depth, 1.0)
+        moved = Exit()
+        if wp.static(probed):
+            moved = paths.exit[i]
+        sc = scatter(scene, smp, ps, load_path(paths, i), hit, s, m, rr_depth, 1.0, moved)
         store_path(paths, i, sc.path)
         if sc.shadow.on:
             push_shadow(paths, i, sc.shadow)
@@ -172,6 +179,29 @@ def shade_kernel(features: Features, independent: bool, shader: Shader) -> wp.Ke
             push(paths, RAYS, i)
 
     return _kernel(shade, capped=True)
+
+
+@lru_cache(maxsize=None)
+def probe_kernel(features: Features, independent: bool, shader: Shader) -> wp.Kernel:
+    """The probe step of a kind whose vertex subsurface scattering may move (``moves_vertex``), before
+    its shading kernel, over the same queue: the subsurface step (its probe rays through the BVH),
+    its weight and rays applied to the path, and where it left the vertex kept for shading."""
+    probe = probe_function(features, independent, shader.kind)
+    queue = FIRST_KIND + shaders(features).index(shader)
+
+    def probe_paths(scene: Scene, smp: SamplerParams, paths: PathBuffers):
+        i = paths.queue[queue, wp.tid()]
+        hit = paths.hit[i]
+        s = surface_at(scene.geo, hit, scene.shape_flip[scene.geo.inst_shape[hit.inst]] != 0)
+        ps = PixelSample()
+        if wp.static(not independent):
+            ps = paths.sample[i]
+        ev = probe(scene, smp, ps, load_path(paths, i), hit, s, paths.material[i])
+        paths.beta[i] = wp.cw_mul(paths.beta[i], ev.weight)
+        paths.rays[i] = paths.rays[i] + ev.rays
+        paths.exit[i] = exit_of(ev)
+
+    return _kernel(probe_paths, capped=True)
 
 
 def lens_step(features: Features) -> bool:
@@ -237,6 +267,8 @@ def wavefront_kernels(features: Features, independent: bool) -> dict[str, wp.Ker
     if features.bump:
         kernels["bump"] = bump_kernel(features)
     for shader in shaders(features):
+        if moves_vertex(features, shader.kind):
+            kernels[f"probe_{shader.kind}"] = probe_kernel(features, independent, shader)
         kernels[shader.name] = shade_kernel(features, independent, shader)
     kernels["shadow"] = shadow_kernel(features)
     if lens_step(features):
@@ -263,9 +295,12 @@ class Wavefront:
             k = kind_id(name.removeprefix("shade_").removesuffix("_walk"))
             if queue_of_kind[k] < 0:        # a kind's first queue; hits sends walking films to the second
                 queue_of_kind[k] = FIRST_KIND + q
+        probed = any(name.startswith("probe_") for name in self.kernels)
         self.buffers = [path_buffers(self.max_paths, not self.independent, queue_of_kind, len(names), self.device,
-                                     "bump" in self.kernels) for _ in range(self.slots)]
+                                     "bump" in self.kernels, probed) for _ in range(self.slots)]
         self.shaders = [self.kernels[name] for name in names]
+        # per shading kernel its probe step's kernel, run first over the same queue (None: none)
+        self.probes = [self.kernels.get("probe_" + name.removeprefix("shade_")) for name in names]
 
     def launch(self, slot: int, scene: Scene, smp: SamplerParams, seed: int, sample_index: int, first_row: int,
                rows: int, max_depth: int, rr_depth: int, film: wp.array, bad_samples: wp.array,
@@ -287,8 +322,10 @@ class Wavefront:
             paths.queued.zero_()
             if queued[BUMPS] > 0:
                 wp.launch(k["bump"], dim=int(queued[BUMPS]), inputs=[scene, paths], device=dev)
-            for shade, count in zip(self.shaders, queued[FIRST_KIND:]):
+            for shade, probe, count in zip(self.shaders, self.probes, queued[FIRST_KIND:]):
                 if count > 0:
+                    if probe is not None:
+                        wp.launch(probe, dim=int(count), inputs=[scene, smp, paths], device=dev)
                     wp.launch(shade, dim=int(count), inputs=[scene, smp, paths, rr_depth], device=dev)
             queued = paths.queued.numpy()
             tracing, shadows = int(queued[RAYS]), int(queued[SHADOWS])
