@@ -113,8 +113,8 @@ def path_buffers(n: int, sampled: bool, queue_of_kind: list[int], shading_queues
 
 def bytes_per_path(sampled: bool, queues: int, bumped: bool = True, probed: bool = True) -> int:
     """Device memory of :class:`PathBuffers` per path, from its fields' types: every per-path array,
-    the pixel sample only when ``sampled``, the shading normal only when ``bumped``, and one index in
-    each of ``queues`` queues (the queue counters and the kind table do not grow with the paths)."""
+    the pixel sample only when ``sampled``, the shading normal only when ``bumped``, the probe step's
+    exit only when ``probed``, and one index in each of ``queues`` queues (the queue counters and the kind table do not grow with the paths)."""
     total = 0
     for name, var in PathBuffers.vars.items():
         if (name in ("queued", "queue_of_kind") or (name == "sample" and not sampled) or (name == "ns" and not bumped)

@@ -41,7 +41,7 @@ from renderer.geometry.offsets import ray_epsilon
 from renderer.materials import kind_id
 from renderer.materials import subsurface as pbrt_subsurface
 from renderer.materials.bsdf import BSDF
-from renderer.materials.disney import exit_bsdf, subsurface_lobe
+from renderer.materials.disney import EXIT, subsurface_lobe
 from renderer.vecmath import PI, max3
 from renderer.sampling.frames import Frame, frame_from_normal
 from renderer.sampling.rng import hash_u32
@@ -60,11 +60,12 @@ SEED_SALT = wp.constant(wp.uint32(0x5BD1E995))
 
 @wp.struct
 class SubsurfaceStep:
-    """Where the path goes on: the (possibly new) surface point, its BSDF and outgoing direction,
-    the throughput factor, and the BVH queries spent."""
+    """Where the path goes on: the (possibly new) surface point, the flags of its BSDF (the same
+    parameters, loaded where light entered; the step marks the exit or the surface route) and its
+    outgoing direction, the throughput factor, and the BVH queries spent."""
 
     s: Surface
-    b: BSDF
+    flags: int
     wo: wp.vec3
     weight: wp.vec3
     rays: int
@@ -86,7 +87,7 @@ class Exit:
 def exit_of(ev: SubsurfaceStep) -> Exit:
     out = Exit()
     out.hit = ev.exit
-    out.flags = ev.b.flags
+    out.flags = ev.flags
     out.wo = ev.wo
     return out
 
@@ -102,7 +103,7 @@ def _identity(b: BSDF, s: Surface, wo: wp.vec3) -> SubsurfaceStep:
     """The step that changes nothing: the surface point, its BSDF and direction, weight 1."""
     ev = SubsurfaceStep()
     ev.s = s
-    ev.b = b
+    ev.flags = b.flags
     ev.wo = wo
     ev.weight = wp.vec3(1.0)
     ev.rays = 0
@@ -248,6 +249,6 @@ def subsurface_scatter(scene: Scene, b: BSDF, s: Surface, inst: int, wo: wp.vec3
     ev.weight = R * (lobe.entry * float(found) / (pdf * lobe.prob))
     ev.s = si
     ev.exit = chosen
-    ev.b = exit_bsdf(b)
+    ev.flags = b.flags | EXIT
     ev.wo = si.ns * side
     return ev

@@ -142,7 +142,7 @@ def _tabulated_pdf(b: BSDF, m: Medium, delta: wp.vec3, f_s: wp.vec3, f_t: wp.vec
 def _surface_only(ev: SubsurfaceStep, prob: float) -> SubsurfaceStep:
     """The surface route: the dielectric's reflection alone, weighted by 1 / its probability."""
     out = ev
-    out.b.flags = ev.b.flags | pbrt_subsurface.SURFACE
+    out.flags = ev.flags | pbrt_subsurface.SURFACE
     out.weight = wp.vec3(1.0 / prob)
     return out
 
@@ -282,7 +282,7 @@ def tabulated_scatter(coated: bool) -> wp.Function:
             ev.weight = m.to_rgb * sp * (w_in[0] * float(probe.found) / (q * pdf))
         ev.s = si
         ev.exit = probe.chosen
-        ev.b.flags = b.flags | pbrt_subsurface.EXIT
+        ev.flags = b.flags | pbrt_subsurface.EXIT
         ev.wo = si.ns
         return ev
 
@@ -294,7 +294,7 @@ def disney_film_scatter(scene: Scene, b: BSDF, s: Surface, inst: int, wo: wp.vec
     """Disney's step, the route through the body weighted by a film's entry factor
     (:func:`renderer.materials.disney_film.entry_factor`: 1 without a film)."""
     ev = subsurface_scatter(scene, b, s, inst, wo, seed)
-    if (ev.b.flags & disney.EXIT) != 0 and (b.flags & disney.FILM) != 0:
+    if (ev.flags & disney.EXIT) != 0 and (b.flags & disney.FILM) != 0:
         side = wp.where(wp.dot(wo, s.ng) < 0.0, -1.0, 1.0)
         ev.weight = wp.cw_mul(ev.weight, entry_factor(b, wp.dot(wo, s.ns) * side))
     return ev

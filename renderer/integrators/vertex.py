@@ -187,13 +187,14 @@ def scatter_function(features: Features, independent: bool, kind: str | None = N
     ``m`` (of ``kind`` only, when given). The numbers drawn are the scene's: a material that scatters
     below its surface anywhere in the scene takes a subsurface seed at every vertex. ``bumped``: the
     caller put the bump-mapped shading normal in ``s.ns`` (the wavefront's bump step, so a shading
-    kernel holds no bump texture program); not for a kind whose vertex moves (``moves_vertex``).
+    kernel holds no bump texture program); for a kind whose vertex moves (``moves_vertex``) only
     ``probed``: the wavefront's probe step took the subsurface step (:func:`probe_function`) and
-    applied its weight; ``moved`` says where it left the vertex (else ``moved`` is not read)."""
+    applied its weight, ``moved`` says where it left the vertex (else ``moved`` is not read), and
+    with ``bumped`` the bump step's normal in ``s.ns`` is the one where it left."""
     shaded = features if kind is None else dataclasses.replace(features, materials=(kind,))
     draw_sss = features.subsurface
     has_sss = any(moves_vertex(features, k) for k in shaded.materials)
-    assert not (bumped and has_sss), "a moved vertex takes its bump map where it ends"
+    assert not (bumped and has_sss and not probed), "a moved vertex takes its bump map where it ends"
     shading_frame, eval_pdf, sample_bsdf = shading_functions(dataclasses.replace(shaded, bump=False) if bumped
                                                              else shaded)
     sample_light = light_sampler(*dispatch(features.lights, "sample"))
@@ -249,13 +250,16 @@ def scatter_function(features: Features, independent: bool, kind: str | None = N
             if moved.hit.inst >= 0:
                 s = exit_surface(scene, moved.hit)
                 wo = moved.wo
+                if wp.static(bumped):
+                    if scene.mat.bump[m] >= 0:
+                        s.ns = s_hit.ns     # the bump step's, taken where light leaves
         elif wp.static(has_sss):
             # subsurface scattering may move the vertex to where light leaves the object
             sss = subsurface_scatter(scene, b, s, hit.inst, wo, u_sss)
             st.rays = st.rays + sss.rays
             st.beta = wp.cw_mul(st.beta, sss.weight)
             s = sss.s
-            b = sss.b
+            b.flags = sss.flags
             wo = sss.wo
         out.ng = s.ng
         frame = shading_frame(scene, m, s)

@@ -37,7 +37,7 @@ from renderer.integrators.path_state import (BUMPS, FIRST_KIND, LENSES, RAYS, SH
                                              path_buffers, push, push_shadow, store_path)
 from renderer.integrators.shading import bump_normal
 from renderer.integrators.thin_slab import SLABS_ONLY, THINFILM, crossing, crossing_transmittance, face_walk
-from renderer.integrators.subsurface import Exit, exit_of
+from renderer.integrators.subsurface import DISNEY, SUBSURFACE, Exit, exit_of
 from renderer.integrators.vertex import moves_vertex, path_functions, probe_function, scatter_function
 from renderer.integrators.visibility import ray_queries
 from renderer.materials import REGISTRY, kind_id, thinfilm
@@ -136,11 +136,19 @@ def hits_kernel(features: Features) -> wp.Kernel:
 @lru_cache(maxsize=None)
 def bump_kernel(features: Features) -> wp.Kernel:
     """The bump step: for every path whose material has a bump map, its bump-mapped shading normal
-    (the megakernel's ``bump_normal`` at the same surface), kept for its shading kernel."""
+    (the megakernel's ``bump_normal`` at the same surface: where the probe step left a vertex that
+    subsurface scattering moved), kept for its shading kernel."""
+
+    probes = features.subsurface
 
     def bump(scene: Scene, paths: PathBuffers):
         i = paths.queue[BUMPS, wp.tid()]
         hit = paths.hit[i]
+        if wp.static(probes):       # where the probe step moved the vertex (it runs first)
+            kind = scene.mat.kind[paths.material[i]]
+            if kind == DISNEY or kind == SUBSURFACE:
+                if paths.exit[i].hit.inst >= 0:
+                    hit = paths.exit[i].hit
         s = surface_at(scene.geo, hit, scene.shape_flip[scene.geo.inst_shape[hit.inst]] != 0)
         paths.ns[i] = bump_normal(scene, scene.mat.bump[paths.material[i]], s, s.ns)
 
@@ -151,7 +159,7 @@ def bump_kernel(features: Features) -> wp.Kernel:
 def shade_kernel(features: Features, independent: bool, shader: Shader) -> wp.Kernel:
     kind = shader.kind
     probed = moves_vertex(features, kind)       # the probe step moved its vertex
-    bumped = features.bump and not probed       # its normal from the bump step
+    bumped = features.bump                      # its normal from the bump step (where the probe left it)
     # thin films apart from those that walk compile without the walk (their arithmetic is the same)
     films = features if shader.walk or kind != thinfilm.NAME else dataclasses.replace(features, layered=False)
     scatter = scatter_function(films, independent, kind, bumped, probed)
@@ -308,8 +316,9 @@ class Wavefront:
         """One sample for every pixel of rows ``first_row ...``, added as the megakernel adds it.
         Every kernel after ``start`` runs over a queue, whose length the host reads (twice per
         depth: after ``hits``, the shading queues; after shading, the rays and shadow rays to
-        trace); the loop ends when no path is left to trace, by ``max_depth`` at the latest. The bump
-        step runs before the shading kernels, the lens step after the shadow kernel."""
+        trace); the loop ends when no path is left to trace, by ``max_depth`` at the latest. The probe
+        steps run first, then the bump step (where the probes left the vertices), then the shading
+        kernels; the lens step after the shadow kernel."""
         k, paths, dev = self.kernels, self.buffers[slot], self.device
         n = rows * scene.cam.width
         wp.launch(k["start"], dim=n, inputs=[scene, smp, seed, sample_index, first_row, paths], device=dev)
@@ -320,12 +329,13 @@ class Wavefront:
             wp.launch(k["hits"], dim=tracing, inputs=[scene, paths, max_depth], device=dev)
             queued = paths.queued.numpy().copy()
             paths.queued.zero_()
+            for probe, count in zip(self.probes, queued[FIRST_KIND:]):
+                if probe is not None and count > 0:
+                    wp.launch(probe, dim=int(count), inputs=[scene, smp, paths], device=dev)
             if queued[BUMPS] > 0:
                 wp.launch(k["bump"], dim=int(queued[BUMPS]), inputs=[scene, paths], device=dev)
-            for shade, probe, count in zip(self.shaders, self.probes, queued[FIRST_KIND:]):
+            for shade, count in zip(self.shaders, queued[FIRST_KIND:]):
                 if count > 0:
-                    if probe is not None:
-                        wp.launch(probe, dim=int(count), inputs=[scene, smp, paths], device=dev)
                     wp.launch(shade, dim=int(count), inputs=[scene, smp, paths, rr_depth], device=dev)
             queued = paths.queued.numpy()
             tracing, shadows = int(queued[RAYS]), int(queued[SHADOWS])
