@@ -16,7 +16,8 @@ from renderer.camera import generate_ray
 from renderer.device.scene import DeviceScene, Features, Scene
 from renderer.geometry.intersect import Hit, surface_at
 from renderer.integrators.aov_sample import aov_functions, camera_depth, camera_sample, pixel_ids, write_guides
-from renderer.integrators.wavefront import Shader, queue_chooser, queues_of_kinds, shader_features, shaders, step_kernel
+from renderer.integrators.shader_queues import Shader, queue_chooser, queues_of_kinds, shader_features, shaders
+from renderer.integrators.wavefront import step_kernel
 from renderer.sampling.frames import Frame
 
 

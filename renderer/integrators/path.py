@@ -23,6 +23,7 @@ from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import surface_at
 from renderer.geometry.offsets import offset_origin
 from renderer.integrators.media_path import crossed, is_interface, media_functions, scattered_path, start_medium
+from renderer.integrators.subsurface import Exit
 from renderer.integrators.vertex import path_functions, scatter_function
 from renderer.integrators.visibility import ray_queries
 from renderer.media.tracking import ABSORBED, SCATTERED, delta_track
@@ -92,7 +93,7 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
                         continue
             if not ar.shade:
                 break
-            sc = scatter(scene, smp, ps, st, hit, ar.s, ar.m, rr_depth, rr_mean)
+            sc = scatter(scene, smp, ps, st, hit, ar.s, ar.m, rr_depth, rr_mean, Exit())
             st = sc.path
             if sc.shadow.on:
                 st.rays = st.rays + 1

@@ -10,6 +10,7 @@ from __future__ import annotations
 import warp as wp
 
 from renderer.geometry.intersect import Hit
+from renderer.integrators.subsurface import Exit
 from renderer.sampling.samplers import PixelSample
 
 
@@ -74,6 +75,7 @@ class PathBuffers:
     hit: wp.array(dtype=Hit)                # the last intersection
     material: wp.array(dtype=int)           # the hit's material, mixes resolved
     ns: wp.array(dtype=wp.vec3)             # the bump step's shading normal (unused without it: 1 entry)
+    exit: wp.array(dtype=Exit)              # where the probe step left the vertex (unused without it: 1 entry)
     shadow_o: wp.array(dtype=wp.vec3)
     shadow_d: wp.array(dtype=wp.vec3)
     shadow_t: wp.array(dtype=float)
@@ -94,11 +96,12 @@ RAYS, SHADOWS, BUMPS, LENSES, ARRIVED, REDIRECTED, FIRST_KIND = 0, 1, 2, 3, 4, 5
 
 
 def path_buffers(n: int, sampled: bool, queue_of_kind: list[int], shading_queues: int, device: str,
-                 bumped: bool = False, media: bool = False) -> PathBuffers:
+                 bumped: bool = False, media: bool = False, probed: bool = False) -> PathBuffers:
     """Buffers for ``n`` paths; ``sampled``: the scene's sampler (not the independent stream) draws
     the numbers, so each path keeps its pixel sample; ``queue_of_kind``: per material kind id, its
     first shading queue (from FIRST_KIND on; -1: none) of ``shading_queues``; ``bumped``: the bump
-    step runs, so each path keeps its shading normal; ``media``: each path keeps its medium state."""
+    step runs, so each path keeps its shading normal; ``media``: each path keeps its medium state;
+    ``probed``: the probe step runs, so each path keeps where its subsurface step left it."""
     def a(dtype, count: int | tuple[int, int] = n) -> wp.array:
         return wp.zeros(count, dtype=dtype, device=device)
 
@@ -114,6 +117,7 @@ def path_buffers(n: int, sampled: bool, queue_of_kind: list[int], shading_queues
     b.sample = a(PixelSample, n if sampled else 1)
     b.hit = a(Hit)
     b.ns = a(wp.vec3, n if bumped else 1)
+    b.exit = a(Exit, n if probed else 1)
     b.media = a(MediumState, n if media else 1)
     b.shadow_medium = a(int, n if media else 1)
     b.queue_of_kind = wp.array(queue_of_kind, dtype=int, device=device)
@@ -123,13 +127,14 @@ def path_buffers(n: int, sampled: bool, queue_of_kind: list[int], shading_queues
     return b
 
 
-def bytes_per_path(sampled: bool, queues: int, bumped: bool = True, media: bool = True) -> int:
+def bytes_per_path(sampled: bool, queues: int, bumped: bool = True, media: bool = True, probed: bool = True) -> int:
     """Device memory of :class:`PathBuffers` per path, from its fields' types: every per-path array,
     the pixel sample only when ``sampled``, the shading normal only when ``bumped``, the medium
-    state only with ``media``, and one index in each of ``queues`` queues (the queue counters and
-    the kind table do not grow with the paths)."""
+    state only with ``media``, the probe step's exit only when ``probed``, and one index in each of
+    ``queues`` queues (the queue counters and the kind table do not grow with the paths)."""
     unused = {"queued", "queue_of_kind"} | ({"sample"} if not sampled else set()) | (
-        {"ns"} if not bumped else set()) | ({"media", "shadow_medium"} if not media else set())
+        {"ns"} if not bumped else set()) | ({"media", "shadow_medium"} if not media else set()) | (
+        {"exit"} if not probed else set())
     total = 0
     for name, var in PathBuffers.vars.items():
         if name in unused:

@@ -7,7 +7,9 @@ hits), ``hits`` (light that escaped or was hit, the end at the maximum depth, mi
 the material that shades), ``bump`` in scenes with bump maps (the bump-mapped shading normal of
 the paths whose material has one, so the shading kernels hold no texture program for it), one
 ``shade_<kind>`` per material kind of the scene (a vertex of that kind: its BSDF, dispersion,
-subsurface, the light sample's shadow ray and the BSDF sample that continues the path),
+the light sample's shadow ray and the BSDF sample that continues the path), each after a
+``probe_<kind>`` for the kinds whose vertex subsurface scattering may move (the subsurface step
+and its probe rays through the BVH, so the shading kernel holds no BVH traversal),
 ``shadow`` (the shadow rays, and what they let through) and ``lenses`` in scenes with thin slabs
 (the shadow rays that meet only thin slabs' faces, traced face by face), until no path goes on;
 then ``finish`` (the film, dropped samples and ray counts as the megakernel writes them).
@@ -24,52 +26,25 @@ from __future__ import annotations
 
 import dataclasses
 from functools import lru_cache
-from typing import NamedTuple
 
 import warp as wp
 
 from renderer.device.kernel_options import GPU_LAUNCH_BOUNDS, KERNEL_OPTIONS
 from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import surface_at
+from renderer.geometry.offsets import offset_origin
 from renderer.integrators.media_path import crossed, is_interface, media_functions, scattered_path, start_medium
 from renderer.integrators.path_state import (ARRIVED, BUMPS, FIRST_KIND, LENSES, RAYS, REDIRECTED, SHADOWS,
                                              PathBuffers, load_path, path_buffers, push, push_shadow, store_path)
+from renderer.integrators.shader_queues import Shader, queue_chooser, queues_of_kinds, shader_features, shaders
 from renderer.integrators.shading import bump_normal
-from renderer.integrators.thin_slab import SLABS_ONLY, THINFILM, crossing, crossing_transmittance, face_walk
-from renderer.integrators.vertex import moves_vertex, path_functions, scatter_function
+from renderer.integrators.thin_slab import SLABS_ONLY, crossing, crossing_transmittance, face_walk
+from renderer.integrators.subsurface import DISNEY, SUBSURFACE, Exit, exit_of
+from renderer.integrators.vertex import moves_vertex, path_functions, probe_function, scatter_function
 from renderer.integrators.visibility import ray_queries
-from renderer.materials import REGISTRY, kind_id, thinfilm
 from renderer.media.tracking import ABSORBED, SCATTERED, delta_track
 from renderer.sampling.samplers import PixelSample, SamplerParams
-from renderer.geometry.offsets import offset_origin
 from renderer.vecmath import max3, mean3
-
-#: A thin film's flag for the layered walk (its materials' own shading queue, ``Shader.walk``).
-LAYERED = wp.constant(thinfilm.FLAG.layered)
-
-
-
-
-class Shader(NamedTuple):
-    """One shading kernel and its queue: the materials of ``kind``; for thin films, ``walk`` True
-    the ones that take the layered random walk, False the others (kernels without the walk's code)."""
-
-    name: str
-    kind: str
-    walk: bool
-
-
-def shaders(features: Features) -> list[Shader]:
-    """The shading kernels of a scene of ``features``, in queue order (from FIRST_KIND on): one per
-    material kind, two for thin films when some take the layered walk and some do not, so the
-    walk, rare and register-hungry, stays out of the other films' kernel."""
-    out = []
-    for kind in features.materials:
-        out.append(Shader(f"shade_{kind}", kind, kind == thinfilm.NAME and features.layered and not features.unlayered))
-        if kind == thinfilm.NAME and features.layered and features.unlayered:
-            out.append(Shader(f"shade_{kind}_walk", kind, True))
-    return out
-
 
 def step_kernel(f, capped: bool = False) -> wp.Kernel:
     """A render kernel in a module of its own (compiled, cached and measured alone); ``capped``: held
@@ -77,46 +52,6 @@ def step_kernel(f, capped: bool = False) -> wp.Kernel:
     frames under the cap are measured in docs/gpu.md)."""
     return wp.kernel(f, module="unique", module_options=KERNEL_OPTIONS,
                      launch_bounds=GPU_LAUNCH_BOUNDS if capped else None)
-
-
-def shader_features(features: Features, shader: Shader) -> Features:
-    """What a shader's kernel compiles: thin films apart from those that walk without the walk
-    (their arithmetic is the same)."""
-    if shader.walk or shader.kind != thinfilm.NAME:
-        return features
-    return dataclasses.replace(features, layered=False)
-
-
-def queues_of_kinds(shader_names: list[str], first: int = FIRST_KIND) -> list[int]:
-    """Per material kind id, its first queue (-1: none), for kernels named ``<step>_<kind>[_walk]``
-    in queue order (``shaders``) from queue ``first`` on: ``queue_chooser`` sends walking films to
-    their second queue."""
-    queue_of_kind = [-1] * len(REGISTRY)
-    for q, name in enumerate(shader_names):
-        k = kind_id(name.split("_", 1)[1].removesuffix("_walk"))
-        if queue_of_kind[k] < 0:
-            queue_of_kind[k] = first + q
-    return queue_of_kind
-
-
-@lru_cache(maxsize=None)
-def queue_chooser(features: Features, first: int = FIRST_KIND) -> wp.Function:
-    """``shading_queue(scene, queue_of_kind, m) -> int``: the queue of the shader of material m
-    (its kind's; thin films that walk have their own when the scene has both kinds of film), the
-    shaders' queues counted from ``first``."""
-    walks = [first + q for q, sh in enumerate(shaders(features)) if sh.name.endswith("_walk")]
-    walk_queue = walks[0] if walks else -1
-
-    @wp.func
-    def shading_queue(scene: Scene, queue_of_kind: wp.array(dtype=int), m: int) -> int:
-        kind = scene.mat.kind[m]
-        queue = queue_of_kind[kind]
-        if wp.static(walk_queue >= 0):
-            if kind == THINFILM and (scene.mat.flags[m] & LAYERED) != 0:
-                queue = walk_queue
-        return queue
-
-    return shading_queue
 
 
 @lru_cache(maxsize=None)
@@ -231,11 +166,19 @@ def medium_kernel(features: Features) -> wp.Kernel:
 @lru_cache(maxsize=None)
 def bump_kernel(features: Features) -> wp.Kernel:
     """The bump step: for every path whose material has a bump map, its bump-mapped shading normal
-    (the megakernel's ``bump_normal`` at the same surface), kept for its shading kernel."""
+    (the megakernel's ``bump_normal`` at the same surface: where the probe step left a vertex that
+    subsurface scattering moved), kept for its shading kernel."""
+
+    probes = features.subsurface
 
     def bump(scene: Scene, paths: PathBuffers):
         i = paths.queue[BUMPS, wp.tid()]
         hit = paths.hit[i]
+        if wp.static(probes):       # where the probe step moved the vertex (it runs first)
+            kind = scene.mat.kind[paths.material[i]]
+            if kind == DISNEY or kind == SUBSURFACE:
+                if paths.exit[i].hit.inst >= 0:
+                    hit = paths.exit[i].hit
         s = surface_at(scene.geo, hit, scene.shape_flip[scene.geo.inst_shape[hit.inst]] != 0)
         paths.ns[i] = bump_normal(scene, scene.mat.bump[paths.material[i]], s, s.ns)
 
@@ -245,8 +188,9 @@ def bump_kernel(features: Features) -> wp.Kernel:
 @lru_cache(maxsize=None)
 def shade_kernel(features: Features, independent: bool, shader: Shader) -> wp.Kernel:
     kind = shader.kind
-    bumped = features.bump and not moves_vertex(features, kind)    # its normal from the bump step
-    scatter = scatter_function(shader_features(features, shader), independent, kind, bumped)
+    probed = moves_vertex(features, kind)       # the probe step moved its vertex
+    bumped = features.bump                      # its normal from the bump step (where the probe left it)
+    scatter = scatter_function(shader_features(features, shader), independent, kind, bumped, probed)
     queue = FIRST_KIND + shaders(features).index(shader)
     media = features.media
 
@@ -264,7 +208,10 @@ def shade_kernel(features: Features, independent: bool, shader: Shader) -> wp.Ke
         rr_mean = float(1.0)            # with media, roulette weighs the channels' mean density
         if wp.static(media):
             rr_mean = mean3(paths.media[i].r_u)
-        sc = scatter(scene, smp, ps, load_path(paths, i), hit, s, m, rr_depth, rr_mean)
+        moved = Exit()
+        if wp.static(probed):
+            moved = paths.exit[i]
+        sc = scatter(scene, smp, ps, load_path(paths, i), hit, s, m, rr_depth, rr_mean, moved)
         store_path(paths, i, sc.path)
         if sc.shadow.on:
             push_shadow(paths, i, sc.shadow)
@@ -280,6 +227,29 @@ def shade_kernel(features: Features, independent: bool, shader: Shader) -> wp.Ke
             push(paths, RAYS, i)
 
     return step_kernel(shade, capped=True)
+
+
+@lru_cache(maxsize=None)
+def probe_kernel(features: Features, independent: bool, shader: Shader) -> wp.Kernel:
+    """The probe step of a kind whose vertex subsurface scattering may move (``moves_vertex``), before
+    its shading kernel, over the same queue: the subsurface step (its probe rays through the BVH),
+    its weight and rays applied to the path, and where it left the vertex kept for shading."""
+    probe = probe_function(features, independent, shader.kind)
+    queue = FIRST_KIND + shaders(features).index(shader)
+
+    def probe_paths(scene: Scene, smp: SamplerParams, paths: PathBuffers):
+        i = paths.queue[queue, wp.tid()]
+        hit = paths.hit[i]
+        s = surface_at(scene.geo, hit, scene.shape_flip[scene.geo.inst_shape[hit.inst]] != 0)
+        ps = PixelSample()
+        if wp.static(not independent):
+            ps = paths.sample[i]
+        ev = probe(scene, smp, ps, load_path(paths, i), hit, s, paths.material[i])
+        paths.beta[i] = wp.cw_mul(paths.beta[i], ev.weight)
+        paths.rays[i] = paths.rays[i] + ev.rays
+        paths.exit[i] = exit_of(ev)
+
+    return step_kernel(probe_paths, capped=True)
 
 
 def lens_step(features: Features) -> bool:
@@ -357,6 +327,8 @@ def wavefront_kernels(features: Features, independent: bool) -> dict[str, wp.Ker
     if features.bump:
         kernels["bump"] = bump_kernel(features)
     for shader in shaders(features):
+        if moves_vertex(features, shader.kind):
+            kernels[f"probe_{shader.kind}"] = probe_kernel(features, independent, shader)
         kernels[shader.name] = shade_kernel(features, independent, shader)
     kernels["shadow"] = shadow_kernel(features)
     if lens_step(features):
@@ -378,10 +350,13 @@ class Wavefront:
 
     def __post_init__(self) -> None:
         names = [name for name in self.kernels if name.startswith("shade_")]     # in queue order (``shaders``)
+        probed = any(name.startswith("probe_") for name in self.kernels)
         self.buffers = [path_buffers(self.max_paths, not self.independent, queues_of_kinds(names), len(names),
-                                     self.device,
-                                     "bump" in self.kernels, "medium" in self.kernels) for _ in range(self.slots)]
+                                     self.device, "bump" in self.kernels, "medium" in self.kernels, probed)
+                        for _ in range(self.slots)]
         self.shaders = [self.kernels[name] for name in names]
+        # per shading kernel its probe step's kernel, run first over the same queue (None: none)
+        self.probes = [self.kernels.get("probe_" + name.removeprefix("shade_")) for name in names]
 
     def launch(self, slot: int, scene: Scene, smp: SamplerParams, seed: int, sample_index: int, first_row: int,
                rows: int, max_depth: int, rr_depth: int, film: wp.array, bad_samples: wp.array,
@@ -389,10 +364,11 @@ class Wavefront:
         """One sample for every pixel of rows ``first_row ...``, added as the megakernel adds it.
         Every kernel after ``start`` runs over a queue, whose length the host reads (twice per
         depth: after ``hits``, the shading queues; after shading, the rays and shadow rays to
-        trace); the loop ends when no path is left to trace, by ``max_depth`` at the latest. The bump
-        step runs before the shading kernels, the lens step after the shadow kernel; with media the
-        medium step runs between ``intersect`` and ``hits`` (one more read of a queue's length), and
-        the paths it or ``hits`` redirected join the rays that shading continues."""
+        trace); the loop ends when no path is left to trace, by ``max_depth`` at the latest. The probe
+        steps run first, then the bump step (where the probes left the vertices), then the shading
+        kernels; the lens step after the shadow kernel; with media the medium step runs between
+        ``intersect`` and ``hits`` (one more read of a queue's length), and the paths it or ``hits``
+        redirected join the rays that shading continues."""
         k, paths, dev = self.kernels, self.buffers[slot], self.device
         n = rows * scene.cam.width
         wp.launch(k["start"], dim=n, inputs=[scene, smp, seed, sample_index, first_row, paths], device=dev)
@@ -408,6 +384,9 @@ class Wavefront:
                 wp.launch(k["hits"], dim=arrived, inputs=[scene, paths, max_depth], device=dev)
             queued = paths.queued.numpy().copy()
             paths.queued.zero_()
+            for probe, count in zip(self.probes, queued[FIRST_KIND:]):
+                if probe is not None and count > 0:
+                    wp.launch(probe, dim=int(count), inputs=[scene, smp, paths], device=dev)
             if queued[BUMPS] > 0:
                 wp.launch(k["bump"], dim=int(queued[BUMPS]), inputs=[scene, paths], device=dev)
             for shade, count in zip(self.shaders, queued[FIRST_KIND:]):

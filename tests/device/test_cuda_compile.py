@@ -148,6 +148,25 @@ def test_bump_and_lens_steps_fit_the_target():
         assert row.resources.stack_bytes <= TARGET.stack_bytes, (row.name, row.resources)
 
 
+def test_subsurface_probe_step_holds_the_bvh_traversal():
+    """Subsurface scattering's probe rays run in the wavefront's probe step, so the shading kernel of
+    a scene with subsurface scattering holds no BVH traversal (the BVH's stacks are the probe
+    kernel's 34,816 B of shared memory per block) and its frame is smaller (sand_patch's
+    `shade_disney` was 1,728 B with the probe inside: docs/gpu.md, "The subsurface probe step")."""
+    from renderer.api import load_scene
+    from renderer.device.scene import upload
+    from renderer.integrators.shader_queues import shaders
+    from renderer.integrators.wavefront import probe_kernel, shade_kernel
+
+    features = upload(load_scene(ROOT / "scenes" / "sand_patch.pbrt"), "cpu", 8, 8).features
+    assert features.subsurface
+    shader = next(sh for sh in shaders(features) if sh.kind == "disney")
+    probe, shade = compile_kernels({"probe_disney": probe_kernel(features, False, shader),
+                                    "shade_disney": shade_kernel(features, False, shader)}, [90])
+    assert shade.resources.shared_bytes < probe.resources.shared_bytes, (shade.resources, probe.resources)
+    assert shade.resources.stack_bytes < 1728, shade.resources
+
+
 def test_media_steps_fit_the_target():
     """A scene with participating media renders with the wavefront on CUDA: its medium step (delta
     tracking, the light sample and phase sampling at a scattering) and its shadow kernel (ratio
