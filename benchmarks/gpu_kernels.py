@@ -1,6 +1,6 @@
 """What the render kernels will cost on a GPU, for every scene in ``scenes/`` and for a kernel
 with every feature at once (every material, light, bump, cut-outs, mixes, subsurface,
-dispersion): ``--compile-only``'s table from a cold kernel cache, so the compile seconds are
+dispersion, media): ``--compile-only``'s table from a cold kernel cache, so the compile seconds are
 NVRTC's own. No GPU needed.
 
     python benchmarks/gpu_kernels.py [--arch sm_90] [--scenes scenes/demo.pbrt ...] [--aov] [--megakernel]
@@ -30,7 +30,7 @@ def every_feature():
     kinds = tuple(lights.REGISTRY)
     return Features(materials=tuple(sorted(materials.REGISTRY)), bump=True, lights=kinds,
                     escaping=tuple(k for k in kinds if hasattr(lights.REGISTRY[k], "escaped")), nee=True,
-                    subsurface=True, alpha=True, mix=True, dispersion=True)
+                    subsurface=True, alpha=True, mix=True, dispersion=True, media=True)
 
 
 def scene_features(path: Path):

@@ -40,11 +40,10 @@ def open_session(scene: SceneDescription, settings: RenderSettings, device: str 
     megakernel (False) instead of the device's default (the wavefront on CUDA); the same image.
     ``aov``: compile the AOV kernel with the others (``session.aovs()`` follows the passes).
     ``render`` and the ``render`` command both start here."""
-    from renderer.device.scene import uses_media
     from renderer.integrators.kernels import use_wavefront
 
     limit = None if memory_limit_gb is None else int(memory_limit_gb * 2**30)
-    check_fits(scene, settings.width, settings.height, limit, use_wavefront(device, wavefront, uses_media(scene)))
+    check_fits(scene, settings.width, settings.height, limit, use_wavefront(device, wavefront))
     session = RenderSession(scene, settings, device=device, threads=threads, wavefront=wavefront, aov=aov)
     if resume is not None:
         session.restore(load_checkpoint(resume), source=str(resume))

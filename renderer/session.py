@@ -105,7 +105,7 @@ class RenderSession:
         self.film = Film(W, H, device)
         self.sampler = upload_sampler(settings.sampler, W, H, device)
         independent = settings.sampler.name == "independent"
-        self.wavefront = use_wavefront(device, wavefront, self.ds.features.media)   # the same image either way
+        self.wavefront = use_wavefront(device, wavefront)   # the same image either way
         kernels = render_kernels(self.ds.features, independent, aov, wavefront=self.wavefront)
         self.kernel = kernels.get("path")
         t0 = time.perf_counter()
@@ -212,7 +212,7 @@ class RenderSession:
         launched over the passes' row chunks and threads."""
         from renderer.integrators.aov import render_aovs
 
-        return render_aovs(self.ds, self.settings.seed, n_samples, self.chunks, self.threads)
+        return render_aovs(self.ds, self.settings.seed, n_samples, self.chunks, self.threads, steps=self.wavefront)
 
     # ---- checkpoints ----------------------------------------------------------------------
 

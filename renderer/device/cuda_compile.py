@@ -124,7 +124,7 @@ def compile_scene(scene, settings, device: str, arch: str | None, wavefront: boo
     # the kernels depend on the scene's features only, which an upload to the CPU determines
     ds = upload(scene, "cpu", settings.width, settings.height, nee=settings.nee, thin_film=settings.thin_film)
     kernels = render_kernels(ds.features, settings.sampler.name == "independent", aov,
-                             use_wavefront(device, wavefront, ds.features.media))
+                             use_wavefront(device, wavefront))
     t0 = time.perf_counter()
     rows = compile_kernels(kernels, archs, say)
     if any(not r.cached for r in rows):

@@ -83,14 +83,16 @@ def estimate(desc: SceneDescription, width: int, height: int, wavefront: bool = 
     chunk of rows) holds them; CPU workers hold one chunk each, a fraction of that."""
     total = _BASE + width * height * _PIXEL
     if wavefront:
+        from renderer.device.scene import uses_media
         from renderer.integrators.path_state import FIRST_KIND, bytes_per_path
-        from renderer.materials import lobe_features
+        from renderer.materials import lobe_features, scatters_below
 
         films = lobe_features(desc.materials)
         kinds = len({m.kind for m in desc.materials})            # a shading queue each, at most
         kinds += films["layered"] and films["unlayered"]         # thin films that walk apart from the others
         bumped = any(m.values.get("displacement") is not None for m in desc.materials)
-        total += width * height * bytes_per_path(True, FIRST_KIND + kinds, bumped)
+        total += width * height * bytes_per_path(True, FIRST_KIND + kinds, bumped, uses_media(desc),
+                                                 scatters_below(desc.materials))
     for m in desc.meshes:
         total += 2 * len(m.positions) * _VERTEX + len(m.indices) * (2 * _TRIANGLE + _BVH_PER_TRIANGLE)
     total += sum(len(s.transforms) * len(s.shapes) for s in desc.instance_sets) * _INSTANCE

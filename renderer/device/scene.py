@@ -12,8 +12,8 @@ from renderer.errors import SceneError
 from renderer.geometry.instances import Geometry, GeometryData, build_geometry
 from renderer.lights import build_light_table, kinds_in
 from renderer.lights.table import Lights
-from renderer.materials import (Materials, build_materials, dielectric, disney, lobe_features, selection, subsurface,
-                                thinfilm)
+from renderer.materials import (Materials, build_materials, dielectric, lobe_features, scatters_below, selection,
+                                subsurface, thinfilm)
 from renderer.media.device import Media, upload_media
 from renderer.color.rgb_weights import RgbWeightTable, make_rgb_weight_table
 from renderer.scene.description import SceneDescription
@@ -155,8 +155,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
         lights=light_kinds,
         escaping=escaping,
         nee=nee,
-        subsurface=any((m.kind == disney.NAME and disney.has_subsurface(m.values)) or m.kind == subsurface.NAME
-                       for m in desc.materials),
+        subsurface=scatters_below(desc.materials),
         alpha=bool(np.any(alpha >= 0)),
         mix=any(m.kind == selection.MIX for m in desc.materials),
         dispersion=dispersion or spectral_sss,

@@ -23,6 +23,7 @@ import warp as wp
 from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import Hit, surface_at
 from renderer.geometry.offsets import offset_origin, ray_epsilon
+from renderer.integrators.path_state import MediumState, PathState
 from renderer.integrators.visibility import ray_queries
 from renderer.lights import dispatch
 from renderer.lights.sample import light_sampler
@@ -38,14 +39,6 @@ MAX_CROSSINGS = 64
 INTERFACE = wp.constant(INTERFACE_KIND)
 #: the tracking stream's seed offset: not the independent sampler's stream
 _STREAM = 0x2545F491
-
-
-@wp.struct
-class MediumState:
-    medium: int           # the medium the path is in, -1 vacuum
-    c: int                # the channel that samples distances
-    r_u: wp.vec3          # the channels' path densities over channel c's
-    rng: wp.uint32        # tracking's own random numbers
 
 
 @wp.func
@@ -83,6 +76,21 @@ class Scattered:
     wi: wp.vec3           # the phase-sampled direction
     pdf: float
     rng: wp.uint32
+
+
+@wp.func
+def scattered_path(st: PathState, p: wp.vec3, sm: Scattered) -> PathState:
+    """The path after a real scattering at p: its light sample added (one more ray), its next ray
+    from p along the phase-sampled direction, whose density MIS weighs what that ray finds."""
+    out = st
+    out.L = st.L + sm.L
+    out.rays = st.rays + 1
+    out.prev_pdf = sm.pdf
+    out.prev_specular = False
+    out.prev_p = p
+    out.o = p
+    out.d = sm.wi
+    return out
 
 
 class MediaFunctions(NamedTuple):

@@ -22,7 +22,8 @@ from renderer.device.kernel_options import KERNEL_OPTIONS
 from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import surface_at
 from renderer.geometry.offsets import offset_origin
-from renderer.integrators.media_path import crossed, is_interface, media_functions, start_medium
+from renderer.integrators.media_path import crossed, is_interface, media_functions, scattered_path, start_medium
+from renderer.integrators.subsurface import Exit
 from renderer.integrators.vertex import path_functions, scatter_function
 from renderer.integrators.visibility import ray_queries
 from renderer.media.tracking import ABSORBED, SCATTERED, delta_track
@@ -74,13 +75,7 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
                         st.depth = st.depth + 1
                         sm = in_medium.scatter(scene, tr.p, -st.d, ms.medium, ms.c, ms.rng, st.beta, ms.r_u)
                         ms.rng = sm.rng
-                        st.L = st.L + sm.L
-                        st.rays = st.rays + 1
-                        st.prev_pdf = sm.pdf
-                        st.prev_specular = False
-                        st.prev_p = tr.p
-                        st.o = tr.p
-                        st.d = sm.wi
+                        st = scattered_path(st, tr.p, sm)
                         continue
                 rr_mean = mean3(ms.r_u)
                 beta = st.beta
@@ -98,7 +93,7 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
                         continue
             if not ar.shade:
                 break
-            sc = scatter(scene, smp, ps, st, hit, ar.s, ar.m, rr_depth, rr_mean)
+            sc = scatter(scene, smp, ps, st, hit, ar.s, ar.m, rr_depth, rr_mean, Exit())
             st = sc.path
             if sc.shadow.on:
                 st.rays = st.rays + 1

@@ -10,6 +10,7 @@ from __future__ import annotations
 import warp as wp
 
 from renderer.geometry.intersect import Hit
+from renderer.integrators.subsurface import Exit
 from renderer.sampling.samplers import PixelSample
 
 
@@ -30,6 +31,16 @@ class PathState:
     depth: int
     rays: int               # rays traced for this path (camera, continuation, shadow, probes)
     rng: wp.uint32          # the independent sampler's stream
+
+
+@wp.struct
+class MediumState:
+    """A path's state in participating media (pbrt-v4's volpath, renderer.integrators.media_path)."""
+
+    medium: int           # the medium the path is in, -1 vacuum
+    c: int                # the channel that samples distances
+    r_u: wp.vec3          # the channels' path densities over channel c's
+    rng: wp.uint32        # tracking's own random numbers
 
 
 @wp.struct
@@ -64,27 +75,33 @@ class PathBuffers:
     hit: wp.array(dtype=Hit)                # the last intersection
     material: wp.array(dtype=int)           # the hit's material, mixes resolved
     ns: wp.array(dtype=wp.vec3)             # the bump step's shading normal (unused without it: 1 entry)
+    exit: wp.array(dtype=Exit)              # where the probe step left the vertex (unused without it: 1 entry)
     shadow_o: wp.array(dtype=wp.vec3)
     shadow_d: wp.array(dtype=wp.vec3)
     shadow_t: wp.array(dtype=float)
     shadow_L: wp.array(dtype=wp.vec3)
-    queue: wp.array2d(dtype=int)            # per queue (RAYS ... LENSES, then one per material kind), path indices
+    media: wp.array(dtype=MediumState)      # with media: each path's (unused without: 1 entry)
+    shadow_medium: wp.array(dtype=int)      # with media: the medium the shadow ray starts in (1 entry without)
+    queue: wp.array2d(dtype=int)            # per queue (RAYS ... REDIRECTED, then one per material kind), path indices
     queued: wp.array(dtype=int)             # per queue, the paths pushed into it
     queue_of_kind: wp.array(dtype=int)      # per material kind id, its shading queue
 
 
 #: The queues of :class:`PathBuffers`: paths whose next ray is to be traced, paths with a shadow
 #: ray to trace, paths whose material has a bump map (the bump step), shadow rays that meet thin
-#: slabs' faces (the lens step), then one shading queue per material kind of the scene.
-RAYS, SHADOWS, BUMPS, LENSES, FIRST_KIND = 0, 1, 2, 3, 4
+#: slabs' faces (the lens step); with media, paths whose ray reached its surface through the media
+#: (on to ``hits``) and paths whose next ray was set without shading (a scattering in a medium, a
+#: crossing of an interface: traced again); then one shading queue per material kind of the scene.
+RAYS, SHADOWS, BUMPS, LENSES, ARRIVED, REDIRECTED, FIRST_KIND = 0, 1, 2, 3, 4, 5, 6
 
 
 def path_buffers(n: int, sampled: bool, queue_of_kind: list[int], shading_queues: int, device: str,
-                 bumped: bool = False) -> PathBuffers:
+                 bumped: bool = False, media: bool = False, probed: bool = False) -> PathBuffers:
     """Buffers for ``n`` paths; ``sampled``: the scene's sampler (not the independent stream) draws
     the numbers, so each path keeps its pixel sample; ``queue_of_kind``: per material kind id, its
     first shading queue (from FIRST_KIND on; -1: none) of ``shading_queues``; ``bumped``: the bump
-    step runs, so each path keeps its shading normal."""
+    step runs, so each path keeps its shading normal; ``media``: each path keeps its medium state;
+    ``probed``: the probe step runs, so each path keeps where its subsurface step left it."""
     def a(dtype, count: int | tuple[int, int] = n) -> wp.array:
         return wp.zeros(count, dtype=dtype, device=device)
 
@@ -100,6 +117,9 @@ def path_buffers(n: int, sampled: bool, queue_of_kind: list[int], shading_queues
     b.sample = a(PixelSample, n if sampled else 1)
     b.hit = a(Hit)
     b.ns = a(wp.vec3, n if bumped else 1)
+    b.exit = a(Exit, n if probed else 1)
+    b.media = a(MediumState, n if media else 1)
+    b.shadow_medium = a(int, n if media else 1)
     b.queue_of_kind = wp.array(queue_of_kind, dtype=int, device=device)
     queues = FIRST_KIND + shading_queues
     b.queued = a(int, queues)
@@ -107,13 +127,17 @@ def path_buffers(n: int, sampled: bool, queue_of_kind: list[int], shading_queues
     return b
 
 
-def bytes_per_path(sampled: bool, queues: int, bumped: bool = True) -> int:
+def bytes_per_path(sampled: bool, queues: int, bumped: bool = True, media: bool = True, probed: bool = True) -> int:
     """Device memory of :class:`PathBuffers` per path, from its fields' types: every per-path array,
-    the pixel sample only when ``sampled``, the shading normal only when ``bumped``, and one index in
-    each of ``queues`` queues (the queue counters and the kind table do not grow with the paths)."""
+    the pixel sample only when ``sampled``, the shading normal only when ``bumped``, the medium
+    state only with ``media``, the probe step's exit only when ``probed``, and one index in each of
+    ``queues`` queues (the queue counters and the kind table do not grow with the paths)."""
+    unused = {"queued", "queue_of_kind"} | ({"sample"} if not sampled else set()) | (
+        {"ns"} if not bumped else set()) | ({"media", "shadow_medium"} if not media else set()) | (
+        {"exit"} if not probed else set())
     total = 0
     for name, var in PathBuffers.vars.items():
-        if name in ("queued", "queue_of_kind") or (name == "sample" and not sampled) or (name == "ns" and not bumped):
+        if name in unused:
             continue
         total += wp.types.type_size_in_bytes(var.type.dtype) * (queues if name == "queue" else 1)
     return total

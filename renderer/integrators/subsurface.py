@@ -41,7 +41,7 @@ from renderer.geometry.offsets import ray_epsilon
 from renderer.materials import kind_id
 from renderer.materials import subsurface as pbrt_subsurface
 from renderer.materials.bsdf import BSDF
-from renderer.materials.disney import exit_bsdf, subsurface_lobe
+from renderer.materials.disney import EXIT, subsurface_lobe
 from renderer.vecmath import PI, max3
 from renderer.sampling.frames import Frame, frame_from_normal
 from renderer.sampling.rng import hash_u32
@@ -60,14 +60,42 @@ SEED_SALT = wp.constant(wp.uint32(0x5BD1E995))
 
 @wp.struct
 class SubsurfaceStep:
-    """Where the path goes on: the (possibly new) surface point, its BSDF and outgoing direction,
-    the throughput factor, and the BVH queries spent."""
+    """Where the path goes on: the (possibly new) surface point, the flags of its BSDF (the same
+    parameters, loaded where light entered; the step marks the exit or the surface route) and its
+    outgoing direction, the throughput factor, and the BVH queries spent."""
 
     s: Surface
-    b: BSDF
+    flags: int
     wo: wp.vec3
     weight: wp.vec3
     rays: int
+    exit: Hit               # the hit where light leaves (inst -1: the vertex stays where light entered)
+
+
+@wp.struct
+class Exit:
+    """A subsurface step as a later kernel shades it (the wavefront's probe step, whose kernel has
+    applied the weight and rays): the hit where light leaves (inst -1: the vertex stays), the BSDF's
+    flags and the outgoing direction there."""
+
+    hit: Hit
+    flags: int
+    wo: wp.vec3
+
+
+@wp.func
+def exit_of(ev: SubsurfaceStep) -> Exit:
+    out = Exit()
+    out.hit = ev.exit
+    out.flags = ev.flags
+    out.wo = ev.wo
+    return out
+
+
+@wp.func
+def exit_surface(scene: Scene, h: Hit) -> Surface:
+    """The surface at a probe's hit (the mesh's own orientation, as every hit's)."""
+    return surface_at(scene.geo, h, scene.shape_flip[scene.geo.inst_shape[h.inst]] != 0)
 
 
 @wp.func
@@ -75,10 +103,11 @@ def _identity(b: BSDF, s: Surface, wo: wp.vec3) -> SubsurfaceStep:
     """The step that changes nothing: the surface point, its BSDF and direction, weight 1."""
     ev = SubsurfaceStep()
     ev.s = s
-    ev.b = b
+    ev.flags = b.flags
     ev.wo = wo
     ev.weight = wp.vec3(1.0)
     ev.rays = 0
+    ev.exit.inst = -1
     return ev
 
 
@@ -206,7 +235,7 @@ def subsurface_scatter(scene: Scene, b: BSDF, s: Surface, inst: int, wo: wp.vec3
     if found == 0:
         ev.weight = wp.vec3(0.0)  # the profile's mass beyond the geometry leaves the object unseen
         return ev
-    si = surface_at(scene.geo, chosen, scene.shape_flip[scene.geo.inst_shape[inst]] != 0)
+    si = exit_surface(scene, chosen)    # chosen.inst is inst
     delta = si.p - s.p
     dist2 = wp.dot(delta, delta)
     pdf = (P_NORMAL * _axis_pdf(delta, dist2, f.n, si.ng, d)
@@ -219,6 +248,7 @@ def subsurface_scatter(scene: Scene, b: BSDF, s: Surface, inst: int, wo: wp.vec3
                 A[2] * diffusion_profile(dist, d[2]))
     ev.weight = R * (lobe.entry * float(found) / (pdf * lobe.prob))
     ev.s = si
-    ev.b = exit_bsdf(b)
+    ev.exit = chosen
+    ev.flags = b.flags | EXIT
     ev.wo = si.ns * side
     return ev

@@ -15,9 +15,9 @@ import warp as wp
 
 from renderer.color.spectral import LAMBDA_MAX_NM, LAMBDA_MIN_NM
 from renderer.device.scene import Features, Scene
-from renderer.geometry.intersect import Surface, surface_at
-from renderer.integrators.subsurface import (P_NORMAL, SUBSURFACE, SubsurfaceStep, _identity, probe_axes,
-                                             probe_chord, subsurface_scatter)
+from renderer.geometry.intersect import Surface
+from renderer.integrators.subsurface import (P_NORMAL, SUBSURFACE, SubsurfaceStep, _identity, exit_surface,
+                                             probe_axes, probe_chord, subsurface_scatter)
 from renderer.materials import dielectric, disney
 from renderer.materials import subsurface as pbrt_subsurface
 from renderer.materials.beam_diffusion import N_ROWS
@@ -142,7 +142,7 @@ def _tabulated_pdf(b: BSDF, m: Medium, delta: wp.vec3, f_s: wp.vec3, f_t: wp.vec
 def _surface_only(ev: SubsurfaceStep, prob: float) -> SubsurfaceStep:
     """The surface route: the dielectric's reflection alone, weighted by 1 / its probability."""
     out = ev
-    out.b.flags = ev.b.flags | pbrt_subsurface.SURFACE
+    out.flags = ev.flags | pbrt_subsurface.SURFACE
     out.weight = wp.vec3(1.0 / prob)
     return out
 
@@ -263,8 +263,7 @@ def tabulated_scatter(coated: bool) -> wp.Function:
         if probe.found == 0:
             ev.weight = wp.vec3(0.0)
             return ev
-        shape_i = scene.geo.inst_shape[probe.chosen.inst]
-        si = surface_at(scene.geo, probe.chosen, scene.shape_flip[shape_i] != 0)
+        si = exit_surface(scene, probe.chosen)
         delta = si.p - s.p
         pdf = _tabulated_pdf(b, m, delta, f.s, f.t, f.n, si.ng)
         if pdf <= 0.0:
@@ -282,7 +281,8 @@ def tabulated_scatter(coated: bool) -> wp.Function:
         else:
             ev.weight = m.to_rgb * sp * (w_in[0] * float(probe.found) / (q * pdf))
         ev.s = si
-        ev.b.flags = b.flags | pbrt_subsurface.EXIT
+        ev.exit = probe.chosen
+        ev.flags = b.flags | pbrt_subsurface.EXIT
         ev.wo = si.ns
         return ev
 
@@ -294,7 +294,7 @@ def disney_film_scatter(scene: Scene, b: BSDF, s: Surface, inst: int, wo: wp.vec
     """Disney's step, the route through the body weighted by a film's entry factor
     (:func:`renderer.materials.disney_film.entry_factor`: 1 without a film)."""
     ev = subsurface_scatter(scene, b, s, inst, wo, seed)
-    if (ev.b.flags & disney.EXIT) != 0 and (b.flags & disney.FILM) != 0:
+    if (ev.flags & disney.EXIT) != 0 and (b.flags & disney.FILM) != 0:
         side = wp.where(wp.dot(wo, s.ng) < 0.0, -1.0, 1.0)
         ev.weight = wp.cw_mul(ev.weight, entry_factor(b, wp.dot(wo, s.ns) * side))
     return ev

@@ -4,7 +4,7 @@
 A shadow ray from x towards a light meets the slab's two faces; it carries
 T(θ) = T_front(θ) · tint^(1/cos θ_t) · T_back(θ), each face's coating transmittance at the angle the
 light meets it (inside: θ_t, from Snell's law) times half a pass of the tint
-(:func:`renderer.materials.thinfilm.slab_face_transmittance`). The ray goes on straight: a parallel
+(:func:`renderer.materials.thinfilm.slab_face`). The ray goes on straight: a parallel
 slab shifts light sideways by t·sin(θ − θ_t)/cos θ_t but does not turn it. Interreflections
 between the faces are left out of the shadow ray (a few per cent of T at most for R ≈ 4-10 %); BSDF
 sampling still finds them.
@@ -78,10 +78,12 @@ def crossing(scene: Scene, o: wp.vec3, d: wp.vec3, t_max: float) -> int:
 
 
 @lru_cache(maxsize=None)
-def face_walk(closest: wp.Function) -> wp.Function:
+def face_walk(closest: wp.Function, own_kernel: bool = False) -> wp.Function:
     """``through_faces(scene, o, d, t_max) -> vec3``: the ray traced hit by hit (``closest``, the
     kernel's closest-hit query), the product of the thin slabs' faces' transmittances it crosses,
-    0 at any other hit or past MAX_FACES faces."""
+    0 at any other hit or past MAX_FACES faces. ``own_kernel``: the walk is its kernel's only work
+    (the wavefront's lens step), so the coating's optics are inlined into it."""
+    face_transmittance = thinfilm.slab_face(own_kernel)
 
     @wp.func
     def through_faces(scene: Scene, o: wp.vec3, d: wp.vec3, t_max: float) -> wp.vec3:
@@ -98,7 +100,7 @@ def face_walk(closest: wp.Function) -> wp.Function:
             s = surface_at(scene.geo, hit, scene.shape_flip[shape] != 0)
             b = load_bsdf(scene.mat, scene.tex, scene.spectral, scene.spectral_n, m, s)
             b.wavelength_u = to_unit(hash_point_direction(s.p, d))   # spectral:N: this face's jitter
-            T = wp.cw_mul(T, thinfilm.slab_face_transmittance(b, wp.dot(d, s.ns)))
+            T = wp.cw_mul(T, wp.static(face_transmittance)(b, wp.dot(d, s.ns)))
             if max3(T) <= 0.0:
                 return T
             step = offset_origin(s, d)

@@ -30,6 +30,7 @@ from renderer.geometry.offsets import offset_origin, ray_epsilon
 from renderer.integrators.emission import emitted_adder, escaped_adder
 from renderer.integrators.path_state import PathState, ShadowRay
 from renderer.integrators.shading import load_bsdf, shading_functions
+from renderer.integrators.subsurface import Exit, SubsurfaceStep, exit_surface
 from renderer.integrators.tabulated_subsurface import subsurface_step
 from renderer.integrators.thin_slab import crosses_thin_slab
 from renderer.lights import dispatch
@@ -181,16 +182,19 @@ def moves_vertex(features: Features, kind: str) -> bool:
 
 @lru_cache(maxsize=None)
 def scatter_function(features: Features, independent: bool, kind: str | None = None,
-                     bumped: bool = False) -> wp.Function:
-    """``scatter(scene, smp, ps, path, hit, s, m, rr_depth, rr_mean) -> Scattered`` at a vertex of material ``m``
-    (of ``kind`` only, when given). The numbers drawn are the scene's: a material that scatters
+                     bumped: bool = False, probed: bool = False) -> wp.Function:
+    """``scatter(scene, smp, ps, path, hit, s, m, rr_depth, rr_mean, moved) -> Scattered`` at a vertex of material
+    ``m`` (of ``kind`` only, when given). The numbers drawn are the scene's: a material that scatters
     below its surface anywhere in the scene takes a subsurface seed at every vertex. ``bumped``: the
     caller put the bump-mapped shading normal in ``s.ns`` (the wavefront's bump step, so a shading
-    kernel holds no bump texture program); not for a kind whose vertex moves (``moves_vertex``)."""
+    kernel holds no bump texture program); for a kind whose vertex moves (``moves_vertex``) only
+    ``probed``: the wavefront's probe step took the subsurface step (:func:`probe_function`) and
+    applied its weight, ``moved`` says where it left the vertex (else ``moved`` is not read), and
+    with ``bumped`` the bump step's normal in ``s.ns`` is the one where it left."""
     shaded = features if kind is None else dataclasses.replace(features, materials=(kind,))
     draw_sss = features.subsurface
     has_sss = any(moves_vertex(features, k) for k in shaded.materials)
-    assert not (bumped and has_sss), "a moved vertex takes its bump map where it ends"
+    assert not (bumped and has_sss and not probed), "a moved vertex takes its bump map where it ends"
     shading_frame, eval_pdf, sample_bsdf = shading_functions(dataclasses.replace(shaded, bump=False) if bumped
                                                              else shaded)
     sample_light = light_sampler(*dispatch(features.lights, "sample"))
@@ -202,7 +206,7 @@ def scatter_function(features: Features, independent: bool, kind: str | None = N
 
     @wp.func(inline=True)
     def scatter(scene: Scene, smp: SamplerParams, ps: PixelSample, path: PathState, hit: Hit, s_hit: Surface,
-                m: int, rr_depth: int, rr_mean: float) -> Scattered:
+                m: int, rr_depth: int, rr_mean: float, moved: Exit) -> Scattered:
         st = path
         out = Scattered()
         out.alive = False
@@ -240,13 +244,22 @@ def scatter_function(features: Features, independent: bool, kind: str | None = N
                     st.hero = hs[0]
                     st.beta = wp.cw_mul(st.beta, wavelength_weight(scene.spectral, hs))
                 b = dielectric.dispersed(b, st.hero)
-        if wp.static(has_sss):
+        if wp.static(probed):
+            # the probe step moved the vertex (its weight is in st.beta): shade where light leaves
+            b.flags = moved.flags
+            if moved.hit.inst >= 0:
+                s = exit_surface(scene, moved.hit)
+                wo = moved.wo
+                if wp.static(bumped):
+                    if scene.mat.bump[m] >= 0:
+                        s.ns = s_hit.ns     # the bump step's, taken where light leaves
+        elif wp.static(has_sss):
             # subsurface scattering may move the vertex to where light leaves the object
             sss = subsurface_scatter(scene, b, s, hit.inst, wo, u_sss)
             st.rays = st.rays + sss.rays
             st.beta = wp.cw_mul(st.beta, sss.weight)
             s = sss.s
-            b = sss.b
+            b.flags = sss.flags
             wo = sss.wo
         out.ng = s.ng
         frame = shading_frame(scene, m, s)
@@ -315,3 +328,28 @@ def scatter_function(features: Features, independent: bool, kind: str | None = N
         return out
 
     return scatter
+
+
+@lru_cache(maxsize=None)
+def probe_function(features: Features, independent: bool, kind: str) -> wp.Function:
+    """``probe(scene, smp, ps, path, hit, s, m) -> SubsurfaceStep``: the subsurface step ``scatter``
+    takes at a vertex of ``kind`` (``moves_vertex``), with the same material parameters and numbers,
+    for the wavefront's probe step, which keeps the probe rays out of the shading kernel."""
+    step = subsurface_step(dataclasses.replace(features, materials=(kind,)))
+
+    @wp.func(inline=True)
+    def probe(scene: Scene, smp: SamplerParams, ps: PixelSample, path: PathState, hit: Hit, s: Surface,
+              m: int) -> SubsurfaceStep:
+        b = load_bsdf(scene.mat, scene.tex, scene.spectral, scene.spectral_n, m, s)
+        u_sss = int(0)
+        if wp.static(independent):      # scatter's first two draws: the wavelength's, the seed
+            rng = path.rng
+            b.wavelength_u = wp.randf(rng)
+            u_sss = wp.randi(rng)
+        else:
+            dim = DIM_BOUNCE + path.depth * DIMS_PER_BOUNCE
+            b.wavelength_u = get_1d(smp, ps, dim + WAVELENGTH)
+            u_sss = int(hashed_bits(ps, dim + SUBSURFACE))
+        return step(scene, b, s, hit.inst, -path.d, u_sss)
+
+    return probe

@@ -197,6 +197,12 @@ def smooth_kinds(descs: list[MaterialDesc]) -> tuple[str, ...]:
     return tuple(sorted(kinds - {d.kind for d in descs if may_be_rough(d)}))
 
 
+def scatters_below(descs: list[MaterialDesc]) -> bool:
+    """Whether some material carries light below its surface (``Features.subsurface``): a solid
+    ``disney`` with a scatter distance, or pbrt-v4's ``subsurface``."""
+    return any((d.kind == disney.NAME and disney.has_subsurface(d.values)) or d.kind == subsurface.NAME for d in descs)
+
+
 def lobe_features(descs: list[MaterialDesc]) -> dict[str, Any]:
     """The fields of :class:`renderer.device.scene.Features` that say which lobes a scene of these
     materials can reach: ``multiscatter`` (some material that may be rough counts the bounces

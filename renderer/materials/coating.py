@@ -57,8 +57,7 @@ class Coating:
     spectral: RgbWeightTable
 
 
-@wp.func(inline=False)
-def coating_rgb(c: Coating, cos_w: float):
+def _coating_rgb(c: Coating, cos_w: float):
     """RGB (R, T) of the coating for light arriving at cosine cos_w to its normal (negative: from
     the substrate side), each clipped to [0, 1]: a film colour outside the sRGB gamut has a negative
     channel, which a path's throughput must not carry. Rough lobes pass the cosine to the
@@ -68,10 +67,7 @@ def coating_rgb(c: Coating, cos_w: float):
     spectral:N it is the jittered estimate of white, 1 ± 1e-3 at N = 32 and exactly 1 on average,
     so clipping the sum would bias every image darker (about 0.3 % in a glass-sphere furnace).
 
-    Out of line (``inline=False``): a thin film's BSDF and its layered walk call it from some fifteen
-    places, each a copy of every optics branch (table, stack, film; rgb3 and spectral) when inlined.
-    One copy took the beach's thin-film shading kernel on sm_90 from 3.4 MB of code and a 5.7 KB
-    frame to 1.8 MB and 3.6 KB, and halved its NVRTC time (docs/gpu.md); CPU images are unchanged."""
+    Compiled twice (below): ``coating_rgb`` out of line, ``coating_rgb_inlined`` inlined."""
     n0 = c.n_outer
     n2 = c.n_inner
     back = cos_w < 0.0 and c.clear
@@ -112,6 +108,17 @@ def coating_rgb(c: Coating, cos_w: float):
     if not c.clear:
         t = wp.vec3(0.0)
     return r, t
+
+
+#: Out of line: a thin film's BSDF and its layered walk call it from some fifteen places, each a copy
+#: of every optics branch (table, stack, film; rgb3 and spectral) when inlined. One copy took the
+#: beach's thin-film shading kernel on sm_90 from 3.4 MB of code and a 5.7 KB frame to 1.8 MB and
+#: 3.6 KB, and halved its NVRTC time (docs/gpu.md); CPU images are unchanged.
+coating_rgb = wp.func(_coating_rgb, name="coating_rgb", inline=False)
+#: Inlined, for a kernel that calls it from one place only (the wavefront's lens step): no copy is
+#: duplicated, and with no call the compiler allocates the optics together with the caller. The
+#: beach's lens step on sm_90 under the register cap: a 1,200 B frame out of line, 864 B inlined.
+coating_rgb_inlined = wp.func(_coating_rgb, name="coating_rgb_inlined", inline=True)
 
 
 @wp.func

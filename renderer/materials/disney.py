@@ -439,11 +439,3 @@ def subsurface_lobe(b: BSDF, cos_o: float) -> SubsurfaceLobe:
     sss = s.entry * luminance(P.c)
     s.prob = wp.clamp(sss / wp.max(sss + w[0] + w[1] + w[2] + w[3] + w[4], 1.0e-8), 0.02, 0.98)
     return s
-
-
-@wp.func
-def exit_bsdf(b: BSDF) -> BSDF:
-    """The same material at a subsurface exit point: only the exit lobe."""
-    ev = b
-    ev.flags = b.flags | EXIT
-    return ev

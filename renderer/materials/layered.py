@@ -38,8 +38,8 @@ from typing import Any
 
 import warp as wp
 
-from renderer.materials.bsdf import (DIFFUSE, FIRST_DERIVED_FLAG, GLOSSY, REFLECTION, SPECULAR, TRANSMISSION,
-                                     BSDFEval, BSDFSample, failed_sample)
+from renderer.materials.bsdf import (BSDF, DIFFUSE, FIRST_DERIVED_FLAG, GLOSSY, REFLECTION, SPECULAR,
+                                     TRANSMISSION, BSDFEval, BSDFSample, failed_sample)
 from renderer.materials.coating import Coating
 from renderer.materials.layer_interfaces import INTERFACES, LAMBERT, Interface
 from renderer.materials.phase import hg_phase, hg_sample
@@ -388,3 +388,20 @@ def walk(top: int, bottom: int, top_smooth: bool = False) -> tuple[wp.Function, 
         return ev
 
     return layered_eval_pdf, layered_sample
+
+
+@lru_cache(maxsize=None)
+def walk_alone(slab: wp.Function, top: int, bottom: int, top_smooth: bool = False) -> tuple[wp.Function, wp.Function]:
+    """A material's ``eval_pdf(b, wo, wi)`` and ``sample(b, wo, u)`` that are the walk alone, on the
+    slab ``slab(b)`` its parameters give: for a kernel none of whose materials take another lobe."""
+    walk_eval_pdf, walk_sample = walk(top, bottom, top_smooth)
+
+    @wp.func
+    def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
+        return wp.static(walk_eval_pdf)(wp.static(slab)(b), wo, wi)
+
+    @wp.func
+    def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
+        return wp.static(walk_sample)(wp.static(slab)(b), wo, u)
+
+    return eval_pdf, sample

@@ -42,12 +42,13 @@ from renderer.errors import Location, SceneError
 from renderer.materials.bsdf import (BSDF, DIFFUSE, GLOSSY, REFLECTION, SPECULAR, TRANSMISSION, BSDFEval,
                                      BSDFSample, delta_sample, failed_sample, reflect_z, refract, same_hemisphere,
                                      sampled, signed_z)
-from renderer.materials.coating import BOTH_SIDES, Coating, coating_eval, coating_rgb, coating_sample, glossy_reflection
+from renderer.materials.coating import (BOTH_SIDES, Coating, coating_eval, coating_rgb, coating_rgb_inlined,
+                                       coating_sample, glossy_reflection)
 from renderer.materials.coating_energy import coating_ms_eval, coating_ms_sample, mean_reflectance
 from renderer.materials.energy import mirror_lost, mirror_multiple
 from renderer.materials.coating_table import coating_table
 from renderer.materials.layer_interfaces import FILM, LAMBERT, Interface
-from renderer.materials.layered import SLAB_PARAMS, Slab, make_slab, walk, walk_flags
+from renderer.materials.layered import SLAB_PARAMS, Slab, make_slab, walk, walk_alone, walk_flags
 from renderer.materials.microfacet import (ROUGHNESS_PARAMS, ggx_sample_visible, is_smooth, resolve_roughness,
                                            roughness_to_alpha)
 from renderer.materials.stack import STACK_PARAMS, resolve_stack, stack_rows
@@ -183,19 +184,27 @@ def _tinted(b: BSDF, v: wp.vec3, wo: wp.vec3, wi: wp.vec3) -> wp.vec3:
     return wp.cw_mul(v, wp.vec3(wp.pow(tint[0], x), wp.pow(tint[1], x), wp.pow(tint[2], x)))
 
 
-@wp.func
-def slab_face_transmittance(b: BSDF, cos_d: float) -> wp.vec3:
-    """What this face of a thin slab passes of light that crosses it without turning (a shadow ray
-    at cosine cos_d to the normal; light comes from the side it points to): the coating's T from
-    that side (inside: at the angle Snell's law gives) and half a pass of the tint there, as the
-    refraction lobe charges it. The 1/η² of entering and η² of leaving cancel over the slab."""
-    eta = _eta(b)
-    sin2_in = (1.0 - cos_d * cos_d) / (eta * eta)
-    if sin2_in >= 1.0:
-        return wp.vec3(0.0)
-    cos_in = wp.sqrt(1.0 - sin2_in)
-    r, t = coating_RT(b, wp.where(cos_d > 0.0, cos_d, -cos_in))
-    return _tinted(b, t, wp.vec3(0.0, 0.0, 1.0), wp.vec3(0.0, 0.0, -cos_in))
+@lru_cache(maxsize=None)
+def slab_face(inlined: bool) -> wp.Function:
+    """``slab_face_transmittance(b, cos_d) -> vec3`` with the coating's optics out of line (as every
+    other caller has them), or ``inlined`` for the lens step, whose only call it is."""
+    rgb = coating_rgb_inlined if inlined else coating_rgb
+
+    @wp.func
+    def slab_face_transmittance(b: BSDF, cos_d: float) -> wp.vec3:
+        """What this face of a thin slab passes of light that crosses it without turning (a shadow ray
+        at cosine cos_d to the normal; light comes from the side it points to): the coating's T from
+        that side (inside: at the angle Snell's law gives) and half a pass of the tint there, as the
+        refraction lobe charges it. The 1/η² of entering and η² of leaving cancel over the slab."""
+        eta = _eta(b)
+        sin2_in = (1.0 - cos_d * cos_d) / (eta * eta)
+        if sin2_in >= 1.0:
+            return wp.vec3(0.0)
+        cos_in = wp.sqrt(1.0 - sin2_in)
+        r, t = wp.static(rgb)(film_coating(b), wp.where(cos_d > 0.0, cos_d, -cos_in))
+        return _tinted(b, t, wp.vec3(0.0, 0.0, 1.0), wp.vec3(0.0, 0.0, -cos_in))
+
+    return slab_face_transmittance
 
 
 @wp.func
@@ -390,22 +399,6 @@ def _rough_lobes(multiscatter: bool) -> tuple[wp.Function, wp.Function]:
 
 
 @lru_cache(maxsize=None)
-def _walk_lobes(rough: bool) -> tuple[wp.Function, wp.Function]:
-    """``eval_pdf`` and ``sample`` of a kernel whose every thin film walks: the walk and no other lobe."""
-    walk_eval_pdf, walk_sample = walk(FILM, LAMBERT, not rough)
-
-    @wp.func
-    def eval_pdf(b: BSDF, wo: wp.vec3, wi: wp.vec3) -> BSDFEval:
-        return wp.static(walk_eval_pdf)(_slab(b), wo, wi)
-
-    @wp.func
-    def sample(b: BSDF, wo: wp.vec3, u: wp.vec3) -> BSDFSample:
-        return wp.static(walk_sample)(_slab(b), wo, u)
-
-    return eval_pdf, sample
-
-
-@lru_cache(maxsize=None)
 def _lobes(rough: bool, multiscatter: bool, layered: bool) -> tuple[wp.Function, wp.Function]:
     """``eval_pdf`` and ``sample`` compiling only what a kernel's thin films can reach: the GGX lobes
     (``rough``), their compensation (``multiscatter``), the layered walk (``layered``)."""
@@ -446,5 +439,5 @@ eval_pdf, sample = _lobes(True, True, True)
 def specialised(features: Any) -> tuple[wp.Function, wp.Function]:
     """``eval_pdf`` and ``sample`` with only the lobes a kernel of ``features`` can reach (all films walk: the walk)."""
     if features.layered and not features.unlayered:
-        return _walk_lobes(NAME not in features.smooth)
+        return walk_alone(_slab, FILM, LAMBERT, NAME in features.smooth)
     return _lobes(NAME not in features.smooth, features.multiscatter, features.layered)

@@ -115,12 +115,13 @@ def test_representative_scene_compiles_within_budget(capsys):
 
 
 def test_representative_scene_wavefront_fits_the_target(capsys):
-    """What a CUDA render of the demo launches, the wavefront's kernels (its shading kernels under the
-    register cap) and the film's accumulation, fits the design's budget: 128 registers and a frame
-    within 1 KB per kernel."""
-    figures = _compiled(capsys)
+    """What a CUDA render of the demo launches with ``--denoise``, the wavefront's kernels (its shading
+    kernels under the register cap), the film's accumulation and the AOV pass in steps (as one kernel
+    213 registers), fits the design's budget: 128 registers and a frame within 1 KB per kernel."""
+    figures = _compiled(capsys, "--denoise")
     assert set(figures) == {"start", "intersect", "hits", "shade_conductor", "shade_dielectric", "shade_diffuse",
-                            "shadow", "finish", "film"}
+                            "shadow", "finish", "film", "aov_hits", "aov_conductor", "aov_dielectric", "aov_diffuse",
+                            "aov_guides"}
     for name, (registers, stack) in figures.items():
         assert registers <= TARGET.registers, (name, registers)
         assert stack <= TARGET.stack_bytes, (name, stack)
@@ -131,16 +132,53 @@ def test_bump_and_lens_steps_fit_the_target():
     under the register cap, and a scene with thin lenses traces their faces in the lens step, so its
     shadow kernel stays the plain any-hit query's size (with the faces' walk inside it the beach's
     was 215 registers and a 912 B frame: docs/gpu.md, "The bump step, the lens step and the walk's
-    own kernel")."""
+    own kernel"). The lens step fits too, with the coating's optics inlined into it (out of line, the
+    beach's frame was 1,200 B: docs/gpu.md, "The lens step and the thin film's coating")."""
     from renderer.api import load_scene
     from renderer.device.scene import upload
-    from renderer.integrators.wavefront import bump_kernel, shadow_kernel
+    from renderer.integrators.wavefront import bump_kernel, lens_kernel, shadow_kernel
 
     data = ROOT / "tests" / "data" / "pbrt"
     bumped = upload(load_scene(data / "films_walk.pbrt"), "cpu", 8, 8).features
     lenses = upload(load_scene(data / "thin_slab_shadow.pbrt"), "cpu", 8, 8).features
     assert bumped.bump and lenses.thin_slabs
-    for row in compile_kernels({"bump": bump_kernel(bumped), "shadow": shadow_kernel(lenses)}, [90]):
+    kernels = {"bump": bump_kernel(bumped), "shadow": shadow_kernel(lenses), "lenses": lens_kernel(lenses)}
+    for row in compile_kernels(kernels, [90]):
+        assert row.resources.registers <= TARGET.registers, (row.name, row.resources)
+        assert row.resources.stack_bytes <= TARGET.stack_bytes, (row.name, row.resources)
+
+
+def test_subsurface_probe_step_holds_the_bvh_traversal():
+    """Subsurface scattering's probe rays run in the wavefront's probe step, so the shading kernel of
+    a scene with subsurface scattering holds no BVH traversal (the BVH's stacks are the probe
+    kernel's 34,816 B of shared memory per block) and its frame is smaller (sand_patch's
+    `shade_disney` was 1,728 B with the probe inside: docs/gpu.md, "The subsurface probe step")."""
+    from renderer.api import load_scene
+    from renderer.device.scene import upload
+    from renderer.integrators.shader_queues import shaders
+    from renderer.integrators.wavefront import probe_kernel, shade_kernel
+
+    features = upload(load_scene(ROOT / "scenes" / "sand_patch.pbrt"), "cpu", 8, 8).features
+    assert features.subsurface
+    shader = next(sh for sh in shaders(features) if sh.kind == "disney")
+    probe, shade = compile_kernels({"probe_disney": probe_kernel(features, False, shader),
+                                    "shade_disney": shade_kernel(features, False, shader)}, [90])
+    assert shade.resources.shared_bytes < probe.resources.shared_bytes, (shade.resources, probe.resources)
+    assert shade.resources.stack_bytes < 1728, shade.resources
+
+
+def test_media_steps_fit_the_target():
+    """A scene with participating media renders with the wavefront on CUDA: its medium step (delta
+    tracking, the light sample and phase sampling at a scattering) and its shadow kernel (ratio
+    tracking across interfaces) fit the design's budget under the register cap (the megakernel they
+    replace on CUDA: 255 registers, docs/gpu.md "Media")."""
+    from renderer.api import load_scene
+    from renderer.device.scene import upload
+    from renderer.integrators.wavefront import medium_kernel, shadow_kernel
+
+    media = upload(load_scene(ROOT / "tests" / "data" / "pbrt" / "media_cube.pbrt"), "cpu", 8, 8).features
+    assert media.media
+    for row in compile_kernels({"medium": medium_kernel(media), "shadow": shadow_kernel(media)}, [90]):
         assert row.resources.registers <= TARGET.registers, (row.name, row.resources)
         assert row.resources.stack_bytes <= TARGET.stack_bytes, (row.name, row.resources)
 

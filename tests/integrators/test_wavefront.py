@@ -11,7 +11,6 @@ import pytest
 
 from renderer.api import load_scene, open_session, render, settings_for
 from renderer.device.scene import upload
-from renderer.errors import RenderError
 from renderer.integrators.kernels import render_kernels, use_wavefront
 from renderer.session import RenderStats
 
@@ -21,7 +20,8 @@ PBRT = ROOT / "tests" / "data" / "pbrt"
 #: (scene, sampler or None for the scene's, width, height, spp): together they cover every
 #: material family, mixes, alpha cut-outs, dispersion, subsurface scattering, bump maps,
 #: environment, distant and area lights, thin slabs, thin films with and without the layered walk
-#: in one scene, and four samplers (checked below).
+#: in one scene, participating media (a camera inside fog, media behind interfaces and inside
+#: glass), and four samplers (checked below).
 CASES = [
     (ROOT / "scenes" / "demo.pbrt", None, 32, 18, 2),                 # zsobol; glass, metals, area light
     (ROOT / "scenes" / "demo.pbrt", "independent", 32, 18, 2),
@@ -36,6 +36,9 @@ CASES = [
     (PBRT / "thin_slab_shadow.pbrt", None, 24, 18, 2),                # shadow rays through a thin lens
     (PBRT / "films_walk.pbrt", None, 32, 18, 2),                      # walking and one-pass films, bump maps
     (PBRT / "bumped_subsurface.pbrt", None, 32, 18, 2),               # bump maps with and without subsurface
+    (PBRT / "media_fog.pbrt", "zsobol", 24, 18, 2),                   # the camera in fog, a spot light
+    (PBRT / "media_cube.pbrt", None, 36, 16, 2),                      # scattering media behind interfaces
+    (PBRT / "media_glass.pbrt", None, 24, 24, 2),                     # an absorbing medium inside glass
 ]
 
 
@@ -53,7 +56,7 @@ def test_cases_cover_the_features():
     assert {"diffuse", "dielectric", "conductor", "thinfilm", "disney", "coateddiffuse", "subsurface"} <= kinds, kinds
     lights = {k for f in features for k in f.lights}
     assert {"infinite", "distant", "diffuse"} <= lights, lights
-    for flag in ("mix", "alpha", "dispersion", "subsurface", "bump", "thin_slabs"):
+    for flag in ("mix", "alpha", "dispersion", "subsurface", "bump", "thin_slabs", "media"):
         assert any(getattr(f, flag) for f in features), flag
     assert any(f.layered and f.unlayered and f.bump for f in features)     # the walk's own kernel
     samplers = {c[1] or load_scene(c[0]).sampler.kind for c in CASES}
@@ -86,9 +89,9 @@ def test_resume_across_integrators():
 
 def test_device_default_and_kernels():
     features = upload(load_scene(CASES[0][0]), "cpu", 8, 8).features
-    assert use_wavefront("cuda", None, features.media) and use_wavefront("cuda:1", None, features.media)
-    assert not use_wavefront("cpu", None, features.media)
-    assert use_wavefront("cpu", True, features.media) and not use_wavefront("cuda", False, features.media)
+    assert use_wavefront("cuda", None) and use_wavefront("cuda:1", None)
+    assert not use_wavefront("cpu", None)
+    assert use_wavefront("cpu", True) and not use_wavefront("cuda", False)
     names = list(render_kernels(features, False, wavefront=True))
     assert names == ["start", "intersect", "hits", *[f"shade_{k}" for k in features.materials], "shadow",
                      "finish", "film"]
@@ -99,15 +102,8 @@ def test_device_default_and_kernels():
         "finish", "film"]
     lens = upload(load_scene(PBRT / "thin_slab_shadow.pbrt"), "cpu", 8, 8).features
     assert list(render_kernels(lens, False, wavefront=True))[-4:] == ["shadow", "lenses", "finish", "film"]
-
-
-def test_scenes_with_media_keep_the_megakernel():
-    """Only the megakernel tracks media: a CUDA render of a scene with a medium uses it, and asking
-    for the wavefront is refused in one sentence."""
-    features = upload(load_scene(PBRT / "media_fog.pbrt"), "cpu", 8, 8).features
-    assert features.media and not use_wavefront("cuda", None, features.media)
-    with pytest.raises(RenderError, match="--no-wavefront"):
-        use_wavefront("cpu", True, features.media)
+    fog = upload(load_scene(PBRT / "media_fog.pbrt"), "cpu", 8, 8).features
+    assert list(render_kernels(fog, True, wavefront=True))[:4] == ["start", "intersect", "medium", "hits"]
 
 
 def test_wavefront_small_kernels_fit_the_gpu_budget():
