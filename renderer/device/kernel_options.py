@@ -37,6 +37,6 @@ KERNEL_OPTIONS: dict[str, Any] = {"enable_backward": False, "max_unroll": 1,
 #: ``launch_bounds`` that hold a CUDA kernel to 128 registers (the budget in DESIGN.md): blocks of
 #: 256 threads (Warp's CUDA launches) of which at least two stay resident per SM, so ptxas fits each
 #: thread in 65,536 / 512 registers instead of up to 255. What does not fit spills into the frame,
-#: whose size is then the figure that decides (the wavefront's bump, shading and lens steps, which
-#: all take it). The CPU ignores it: its code and images are unchanged.
+#: whose size is then the figure that decides (every kernel of the wavefront and of the AOV pass in
+#: steps takes it). The CPU ignores it: its code and images are unchanged.
 GPU_LAUNCH_BOUNDS = (256, 2)

@@ -75,7 +75,7 @@ def aov_hits_kernel(features: Features) -> wp.Kernel:
             q = shader_queue(scene, st.queue_of_kind, m)
             st.queue[q, wp.atomic_add(st.queued, q, 1)] = i
 
-    return step_kernel(aov_hits, capped=True)
+    return step_kernel(aov_hits)
 
 
 @lru_cache(maxsize=None)
@@ -88,7 +88,7 @@ def aov_shader_kernel(features: Features, shader: Shader, queue: int) -> wp.Kern
         s = surface_at(scene.geo, hit, scene.shape_flip[scene.geo.inst_shape[hit.inst]] != 0)
         st.a[i] = st.a[i] + albedo(scene, st.material[i], s, st.frame[i], st.d[i], st.rng[i])
 
-    return step_kernel(aov_shade, capped=True)
+    return step_kernel(aov_shade)
 
 
 @lru_cache(maxsize=None)

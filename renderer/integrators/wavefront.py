@@ -46,12 +46,11 @@ from renderer.media.tracking import ABSORBED, SCATTERED, delta_track
 from renderer.sampling.samplers import PixelSample, SamplerParams
 from renderer.vecmath import max3, mean3
 
-def step_kernel(f, capped: bool = False) -> wp.Kernel:
-    """A render kernel in a module of its own (compiled, cached and measured alone); ``capped``: held
-    to 128 registers on CUDA (the kernels that would take more: bump, shading and lens steps, whose
-    frames under the cap are measured in docs/gpu.md)."""
-    return wp.kernel(f, module="unique", module_options=KERNEL_OPTIONS,
-                     launch_bounds=GPU_LAUNCH_BOUNDS if capped else None)
+def step_kernel(f) -> wp.Kernel:
+    """A render kernel in a module of its own (compiled, cached and measured alone), held to 128
+    registers on CUDA: what does not fit spills into its frame, the figure docs/gpu.md measures
+    (uncapped, alpha cut-outs took the every-feature intersection kernel to 163 registers)."""
+    return wp.kernel(f, module="unique", module_options=KERNEL_OPTIONS, launch_bounds=GPU_LAUNCH_BOUNDS)
 
 
 @lru_cache(maxsize=None)
@@ -160,7 +159,7 @@ def medium_kernel(features: Features) -> wp.Kernel:
         store_path(paths, i, st)
         paths.media[i] = ms
 
-    return step_kernel(medium, capped=True)
+    return step_kernel(medium)
 
 
 @lru_cache(maxsize=None)
@@ -182,7 +181,7 @@ def bump_kernel(features: Features) -> wp.Kernel:
         s = surface_at(scene.geo, hit, scene.shape_flip[scene.geo.inst_shape[hit.inst]] != 0)
         paths.ns[i] = bump_normal(scene, scene.mat.bump[paths.material[i]], s, s.ns)
 
-    return step_kernel(bump, capped=True)
+    return step_kernel(bump)
 
 
 @lru_cache(maxsize=None)
@@ -226,7 +225,7 @@ def shade_kernel(features: Features, independent: bool, shader: Shader) -> wp.Ke
         if sc.alive:
             push(paths, RAYS, i)
 
-    return step_kernel(shade, capped=True)
+    return step_kernel(shade)
 
 
 @lru_cache(maxsize=None)
@@ -249,7 +248,7 @@ def probe_kernel(features: Features, independent: bool, shader: Shader) -> wp.Ke
         paths.rays[i] = paths.rays[i] + ev.rays
         paths.exit[i] = exit_of(ev)
 
-    return step_kernel(probe_paths, capped=True)
+    return step_kernel(probe_paths)
 
 
 def lens_step(features: Features) -> bool:
@@ -289,7 +288,7 @@ def shadow_kernel(features: Features) -> wp.Kernel:
         elif not blocked(scene, paths.shadow_o[i], paths.shadow_d[i], paths.shadow_t[i]):
             paths.L[i] = paths.L[i] + paths.shadow_L[i]
 
-    return step_kernel(shadow, capped=media)     # ratio tracking through media: 150 registers uncapped
+    return step_kernel(shadow)
 
 
 @lru_cache(maxsize=None)
@@ -303,7 +302,7 @@ def lens_kernel(features: Features) -> wp.Kernel:
         paths.L[i] = paths.L[i] + wp.cw_mul(paths.shadow_L[i], through_faces(scene, paths.shadow_o[i],
                                                                              paths.shadow_d[i], paths.shadow_t[i]))
 
-    return step_kernel(lenses, capped=True)
+    return step_kernel(lenses)
 
 
 @lru_cache(maxsize=None)
