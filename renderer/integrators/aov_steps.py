@@ -121,13 +121,13 @@ def launch_aov_steps(ds: DeviceScene, seed: int, n_samples: int, first_row: int,
                      out: dict[str, wp.array]) -> None:
     """The AOVs of rows ``first_row ...`` into ``out`` (render_aovs' arrays), sample by sample."""
     kernels, dev = aov_step_kernels(ds.features), ds.device
-    shader_kernels = [k for name, k in kernels.items() if name not in ("aov_hits", "aov_guides")]
+    shading = {name: k for name, k in kernels.items() if name not in ("aov_hits", "aov_guides")}
     n = rows * ds.width
-    st = aov_steps(n, [name for name in kernels if name not in ("aov_hits", "aov_guides")], dev)
+    st = aov_steps(n, list(shading), dev)
     for k in range(n_samples):
         st.queued.zero_()
         wp.launch(kernels["aov_hits"], dim=n, inputs=[ds.struct, seed, k, first_row, st], device=dev)
-        for kernel, count in zip(shader_kernels, st.queued.numpy()):
+        for kernel, count in zip(shading.values(), st.queued.numpy()):
             if count > 0:
                 wp.launch(kernel, dim=int(count), inputs=[ds.struct, st], device=dev)
     wp.launch(kernels["aov_guides"], dim=n, inputs=[ds.struct, n_samples, first_row, st, *out.values()], device=dev)
