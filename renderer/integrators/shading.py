@@ -25,6 +25,20 @@ BUMP_DELTA = 0.0005
 
 
 @wp.func(inline=True)
+def _with_row(p: Slots, j: int, v: wp.vec3) -> Slots:
+    """``p`` with row ``j`` set to ``v``, each row written at a constant index: ``p[j]`` with the
+    loop's runtime ``j`` put the whole 16x3 matrix in local memory (192 B of every shading kernel's
+    frame); so the rows live in registers, and those no material of the kernel reads vanish."""
+    q = p
+    for k in range(MAX_SLOTS):          # unrolled: the body names wp.static
+        if j == wp.static(k):
+            q[k, 0] = v[0]
+            q[k, 1] = v[1]
+            q[k, 2] = v[2]
+    return q
+
+
+@wp.func(inline=True)
 def load_bsdf(mat: Materials, tex: Textures, spectral: RgbWeightTable, spectral_n: int, m: int,
               s: Surface) -> BSDF:
     """Evaluate a material's parameter textures at the surface point (its uv, or for pbrt's
@@ -39,9 +53,7 @@ def load_bsdf(mat: Materials, tex: Textures, spectral: RgbWeightTable, spectral_
             if wp.isfinite(v):          # a NaN stays NaN: its sample is dropped and counted, not hidden
                 r = mat.bounds[m, j]    # the parameter's declared range, as pbrt clamps textures
                 v = wp.vec3(wp.clamp(v[0], r[0], r[1]), wp.clamp(v[1], r[0], r[1]), wp.clamp(v[2], r[0], r[1]))
-            p[j, 0] = v[0]
-            p[j, 1] = v[1]
-            p[j, 2] = v[2]
+            p = _with_row(p, j, v)
     b = BSDF()
     b.kind = mat.kind[m]
     b.p = p

@@ -164,13 +164,14 @@ def _row(s: Stack, i: int) -> wp.vec3:
 
 
 @wp.func
-def _combine(T: Textures, tid: int, k: int, s: Stack, top: int, uv: wp.vec2, p: wp.vec3, n: wp.vec3) -> wp.vec3:
-    """A combination record's value from its inputs, the top values of the stack (in input order)."""
+def _combine(T: Textures, tid: int, k: int, a: wp.vec3, b: wp.vec3, c: wp.vec3, uv: wp.vec2, p: wp.vec3,
+             n: wp.vec3) -> wp.vec3:
+    """A combination record's value from its inputs ``a``, ``b`` (and a mix's amount ``c``), the
+    top values of the stack in input order. Takes the rows, not the stack: a stack passed by value
+    was a second copy of it in local memory (96 B of the frame)."""
     if k == MIX:
-        t = s[top - 1, 0]
-        return wp.cw_mul(T.scale[tid], _row(s, top - 3) * (1.0 - t) + _row(s, top - 2) * t)
-    a = _row(s, top - 2)
-    b = _row(s, top - 1)
+        t = c[0]
+        return wp.cw_mul(T.scale[tid], a * (1.0 - t) + b * t)
     if k == PRODUCT:
         return wp.cw_mul(T.scale[tid], wp.cw_mul(a, b))
     if k == SELECT:
@@ -197,8 +198,9 @@ def texture_eval(T: Textures, tid: int, uv: wp.vec2, p: wp.vec3, n: wp.vec3) -> 
         if k < MIX:
             v = _plain(T, node, uv, p)
         else:
-            v = _combine(T, node, k, s, top, uv, p, n)
-            top -= wp.where(k == MIX, 3, 2)
+            first = top - wp.where(k == MIX, 3, 2)
+            v = _combine(T, node, k, _row(s, first), _row(s, first + 1), _row(s, top - 1), uv, p, n)
+            top = first
         s[top, 0] = v[0]
         s[top, 1] = v[1]
         s[top, 2] = v[2]

@@ -129,7 +129,19 @@ def marble(perm: wp.array(dtype=int), p: wp.vec3, omega: float, octaves: int, sc
     first = wp.min(int(wp.floor(t * 6.0)), 5)
     t = t * 6.0 - float(first)
     c = MARBLE_COLORS
-    return 1.5 * _bezier(c[first], c[first + 1], c[first + 2], c[first + 3], t)
+    # the segment's four control points, each read at a constant row: indexing the spline with
+    # ``first`` put a copy of it in local memory (108 B of the frame of every kernel with textures)
+    a = c[0]
+    b = c[1]
+    d = c[2]
+    e = c[3]
+    for k in range(1, 6):               # unrolled: the body names wp.static
+        if first == wp.static(k):
+            a = c[k]
+            b = c[k + 1]
+            d = c[k + 2]
+            e = c[k + 3]
+    return 1.5 * _bezier(a, b, d, e, t)
 
 
 @wp.func
