@@ -32,9 +32,7 @@ def _with_row(p: Slots, j: int, v: wp.vec3) -> Slots:
     q = p
     for k in range(MAX_SLOTS):          # unrolled: the body names wp.static
         if j == wp.static(k):
-            q[k, 0] = v[0]
-            q[k, 1] = v[1]
-            q[k, 2] = v[2]
+            q[k] = v
     return q
 
 

@@ -159,11 +159,6 @@ def _selects_second(T: Textures, tid: int, uv: wp.vec2, p: wp.vec3) -> bool:
 
 
 @wp.func
-def _row(s: Stack, i: int) -> wp.vec3:
-    return wp.vec3(s[i, 0], s[i, 1], s[i, 2])
-
-
-@wp.func
 def _combine(T: Textures, tid: int, k: int, a: wp.vec3, b: wp.vec3, c: wp.vec3, uv: wp.vec2, p: wp.vec3,
              n: wp.vec3) -> wp.vec3:
     """A combination record's value from its inputs ``a``, ``b`` (and a mix's amount ``c``), the
@@ -199,10 +194,9 @@ def texture_eval(T: Textures, tid: int, uv: wp.vec2, p: wp.vec3, n: wp.vec3) -> 
             v = _plain(T, node, uv, p)
         else:
             first = top - wp.where(k == MIX, 3, 2)
-            v = _combine(T, node, k, _row(s, first), _row(s, first + 1), _row(s, top - 1), uv, p, n)
+            # rows read in place: a function taking the stack would copy it (another 96 B of frame)
+            v = _combine(T, node, k, s[first], s[first + 1], s[top - 1], uv, p, n)
             top = first
-        s[top, 0] = v[0]
-        s[top, 1] = v[1]
-        s[top, 2] = v[2]
+        s[top] = v
         top += 1
-    return _row(s, 0)
+    return s[0]
