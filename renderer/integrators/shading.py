@@ -28,12 +28,46 @@ BUMP_DELTA = 0.0005
 def _with_row(p: Slots, j: int, v: wp.vec3) -> Slots:
     """``p`` with row ``j`` set to ``v``, each row written at a constant index: ``p[j]`` with the
     loop's runtime ``j`` put the whole 16x3 matrix in local memory (192 B of every shading kernel's
-    frame); so the rows live in registers, and those no material of the kernel reads vanish."""
+    frame); so the rows live in registers, and those no material of the kernel reads vanish. Spelled
+    out: a loop Warp unrolls needs a ``wp.static`` of its variable, which makes the kernel's hash
+    depend on what the process compiled before (tests/integrators/test_kernel_cache_keys.py)."""
     q = p
-    for k in range(MAX_SLOTS):          # unrolled: the body names wp.static
-        if j == wp.static(k):
-            q[k] = v
+    if j == 0:
+        q[0] = v
+    if j == 1:
+        q[1] = v
+    if j == 2:
+        q[2] = v
+    if j == 3:
+        q[3] = v
+    if j == 4:
+        q[4] = v
+    if j == 5:
+        q[5] = v
+    if j == 6:
+        q[6] = v
+    if j == 7:
+        q[7] = v
+    if j == 8:
+        q[8] = v
+    if j == 9:
+        q[9] = v
+    if j == 10:
+        q[10] = v
+    if j == 11:
+        q[11] = v
+    if j == 12:
+        q[12] = v
+    if j == 13:
+        q[13] = v
+    if j == 14:
+        q[14] = v
+    if j == 15:
+        q[15] = v
     return q
+
+
+assert MAX_SLOTS == 16, "_with_row spells out one line per slot"
 
 
 @wp.func(inline=True)

@@ -135,12 +135,16 @@ def marble(perm: wp.array(dtype=int), p: wp.vec3, omega: float, octaves: int, sc
     b = c[1]
     d = c[2]
     e = c[3]
-    for k in range(1, 6):               # unrolled: the body names wp.static
-        if first == wp.static(k):
-            a = c[k]
-            b = c[k + 1]
-            d = c[k + 2]
-            e = c[k + 3]
+    if first == 1:
+        a, b, d, e = c[1], c[2], c[3], c[4]
+    elif first == 2:
+        a, b, d, e = c[2], c[3], c[4], c[5]
+    elif first == 3:
+        a, b, d, e = c[3], c[4], c[5], c[6]
+    elif first == 4:
+        a, b, d, e = c[4], c[5], c[6], c[7]
+    elif first == 5:
+        a, b, d, e = c[5], c[6], c[7], c[8]
     return 1.5 * _bezier(a, b, d, e, t)
 
 
