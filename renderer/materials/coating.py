@@ -137,9 +137,9 @@ def _coating_rgb(optics: wp.Function, name: str) -> wp.Function:
 
     def rgb(c: Coating, cos_w: float):
         rt = wp.static(optics)(c.n_outer, c.n_film, c.n_inner, c.d, c.total, c.clear, c.balanced, c.layers.ptr,
-                                 c.layers.shape[0], c.layer_first, c.layer_count, c.spectral_n, c.table_first,
-                                 c.wavelength_u, c.spectral.w.ptr, c.spectral.w.shape[0], c.spectral.lambda_min,
-                                 c.spectral.step, cos_w)
+                               c.layers.shape[0], c.layer_first, c.layer_count, c.spectral_n, c.table_first,
+                               c.wavelength_u, c.spectral.w.ptr, c.spectral.w.shape[0], c.spectral.lambda_min,
+                               c.spectral.step, cos_w)
         return rt.r, rt.t
 
     return wp.func(rgb, name=name, inline=True)
