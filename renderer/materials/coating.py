@@ -57,7 +57,18 @@ class Coating:
     spectral: RgbWeightTable
 
 
-def _coating_rgb(c: Coating, cos_w: float):
+@wp.struct
+class CoatingRT:
+    """A coating's RGB reflectance and transmittance, returned by value from the out-of-line optics: in
+    registers, where two output references would hold each call site's (R, T) in the stack frame."""
+    r: wp.vec3
+    t: wp.vec3
+
+
+def _coating_optics(n_outer: float, n_film: float, n_inner: wp.vec2, d: float, total: float, clear: bool,
+                    balanced: bool, layer_rows: wp.uint64, row_count: int, layer_first: int, layer_count: int,
+                    spectral_n: int, table_first: int, wavelength_u: float, weight_rows: wp.uint64, weight_count: int,
+                    lambda_min: float, step: float, cos_w: float) -> CoatingRT:
     """RGB (R, T) of the coating for light arriving at cosine cos_w to its normal (negative: from
     the substrate side), each clipped to [0, 1]: a film colour outside the sRGB gamut has a negative
     channel, which a path's throughput must not carry. Rough lobes pass the cosine to the
@@ -67,58 +78,83 @@ def _coating_rgb(c: Coating, cos_w: float):
     spectral:N it is the jittered estimate of white, 1 ± 1e-3 at N = 32 and exactly 1 on average,
     so clipping the sum would bias every image darker (about 0.3 % in a glass-sphere furnace).
 
-    Compiled twice (below): ``coating_rgb`` out of line, ``coating_rgb_inlined`` inlined."""
-    n0 = c.n_outer
-    n2 = c.n_inner
-    back = cos_w < 0.0 and c.clear
+    Takes the :class:`Coating`'s fields one by one and its two tables as their rows' addresses and
+    counts (``layer_rows``, ``row_count``; ``weight_rows``, ``weight_count``): an out-of-line call then
+    passes 23 words in registers instead of a 44-word record (28 of them two array descriptors)
+    that the callee copied to its stack frame (docs/gpu.md, "The coating's call")."""
+    layers = wp.array(ptr=layer_rows, shape=(row_count,), dtype=wp.vec4)
+    spectral = RgbWeightTable()
+    spectral.w = wp.array(ptr=weight_rows, shape=(weight_count,), dtype=wp.vec3)
+    spectral.lambda_min = lambda_min
+    spectral.step = step
+    n0 = n_outer
+    n2 = n_inner
+    back = cos_w < 0.0 and clear
     if back:
-        n0 = c.n_inner[0]
-        n2 = wp.vec2(c.n_outer, 0.0)
-    n1 = wp.vec2(c.n_film, 0.0)
+        n0 = n_inner[0]
+        n2 = wp.vec2(n_outer, 0.0)
+    n1 = wp.vec2(n_film, 0.0)
     cos0 = wp.abs(cos_w)
     r = wp.vec3(0.0)
     t = wp.vec3(0.0)
-    if c.table_first > 0:
+    if table_first > 0:
         # the thin-film mode "table": the front side's table, then (clear substrates) the back's
-        first = c.table_first
+        first = table_first
         if back:
-            first = first + 1 + 2 * int(c.layers[first][0])
-        at = table_locate(c.layers, first, cos0)
-        r = table_value(c.layers, first, 2, 0, at)
-        t = table_value(c.layers, first, 2, 1, at)
-    elif c.layer_count > 0:
+            first = first + 1 + 2 * int(layers[first][0])
+        at = table_locate(layers, first, cos0)
+        r = table_value(layers, first, 2, 0, at)
+        t = table_value(layers, first, 2, 1, at)
+    elif layer_count > 0:
         # a stack: d is its mapped total thickness, which scales every layer alike
-        scale = wp.where(c.total > 0.0, c.d / c.total, 1.0)
-        if c.spectral_n > 0:
-            r, t = multilayer_rgb_sampled(cos0, n0, n2, c.layers, c.layer_first, c.layer_count, back, scale,
-                                          c.spectral_n, c.wavelength_u, c.spectral)
+        scale = wp.where(total > 0.0, d / total, 1.0)
+        if spectral_n > 0:
+            r, t = multilayer_rgb_sampled(cos0, n0, n2, layers, layer_first, layer_count, back, scale,
+                                          spectral_n, wavelength_u, spectral)
         else:
-            r, t = multilayer_rgb3(cos0, n0, n2, c.layers, c.layer_first, c.layer_count, back, scale)
-    elif c.spectral_n > 0:
-        r, t = thin_film_rgb_sampled(cos0, n0, n1, n2, c.d, c.spectral_n, c.wavelength_u, c.spectral)
+            r, t = multilayer_rgb3(cos0, n0, n2, layers, layer_first, layer_count, back, scale)
+    elif spectral_n > 0:
+        r, t = thin_film_rgb_sampled(cos0, n0, n1, n2, d, spectral_n, wavelength_u, spectral)
     else:
-        r, t = thin_film_rgb3(cos0, n0, n1, n2, c.d)
-    if c.balanced and c.spectral_n > 0 and c.table_first == 0:
-        white = sampled_white(c.spectral, c.spectral_n, c.wavelength_u)
+        r, t = thin_film_rgb3(cos0, n0, n1, n2, d)
+    if balanced and spectral_n > 0 and table_first == 0:
+        white = sampled_white(spectral, spectral_n, wavelength_u)
         if wp.min(white[0], wp.min(white[1], white[2])) > 0.0:
             r = wp.cw_div(r, white)
             t = wp.cw_div(t, white)
     r = wp.min(wp.max(r, wp.vec3(0.0)), wp.vec3(1.0))
     t = wp.min(wp.max(t, wp.vec3(0.0)), wp.vec3(1.0))
-    if not c.clear:
+    if not clear:
         t = wp.vec3(0.0)
-    return r, t
+    rt = CoatingRT()
+    rt.r = r
+    rt.t = t
+    return rt
+
+
+def _coating_rgb(optics: wp.Function, name: str) -> wp.Function:
+    """``name(c: Coating, cos_w) -> (R, T)``: ``optics`` (:func:`_coating_optics`) on the coating's fields."""
+
+    def rgb(c: Coating, cos_w: float):
+        rt = wp.static(optics)(c.n_outer, c.n_film, c.n_inner, c.d, c.total, c.clear, c.balanced, c.layers.ptr,
+                               c.layers.shape[0], c.layer_first, c.layer_count, c.spectral_n, c.table_first,
+                               c.wavelength_u, c.spectral.w.ptr, c.spectral.w.shape[0], c.spectral.lambda_min,
+                               c.spectral.step, cos_w)
+        return rt.r, rt.t
+
+    return wp.func(rgb, name=name, inline=True)
 
 
 #: Out of line: a thin film's BSDF and its layered walk call it from some fifteen places, each a copy
 #: of every optics branch (table, stack, film; rgb3 and spectral) when inlined. One copy took the
 #: beach's thin-film shading kernel on sm_90 from 3.4 MB of code and a 5.7 KB frame to 1.8 MB and
 #: 3.6 KB, and halved its NVRTC time (docs/gpu.md); CPU images are unchanged.
-coating_rgb = wp.func(_coating_rgb, name="coating_rgb", inline=False)
+coating_rgb = _coating_rgb(wp.func(_coating_optics, name="coating_optics", inline=False), "coating_rgb")
 #: Inlined, for a kernel that calls it from one place only (the wavefront's lens step): no copy is
 #: duplicated, and with no call the compiler allocates the optics together with the caller. The
 #: beach's lens step on sm_90 under the register cap: a 1,200 B frame out of line, 864 B inlined.
-coating_rgb_inlined = wp.func(_coating_rgb, name="coating_rgb_inlined", inline=True)
+coating_rgb_inlined = _coating_rgb(wp.func(_coating_optics, name="coating_optics_inlined", inline=True),
+                                   "coating_rgb_inlined")
 
 
 @wp.func
