@@ -78,3 +78,15 @@ def queue_chooser(features: Features, first: int = FIRST_KIND) -> wp.Function:
         return queue
 
     return shading_queue
+
+
+def split_shading(features: Features, shader: Shader) -> bool:
+    """Whether the wavefront shades a vertex of ``shader`` in two kernels over its queue, the light
+    sample (``light_name``) and then the BSDF sample (``Shader.name``), so neither holds the other's
+    lobes and the light sampler: in scenes that sample lights."""
+    return features.nee and len(features.lights) > 0
+
+
+def light_name(shader: Shader) -> str:
+    """The name of a split shader's light-sample kernel: ``light_<kind>[_walk]``."""
+    return "light_" + shader.name.removeprefix("shade_")
