@@ -195,11 +195,12 @@ def scatter_function(features: Features, independent: bool, kind: str | None = N
     kernel holds no bump texture program); for a kind whose vertex moves (``moves_vertex``) only
     ``probed``: the wavefront's probe step took the subsurface step (:func:`probe_function`) and
     applied its weight, ``moved`` says where it left the vertex (else ``moved`` is not read), and
-    with ``bumped`` the bump step's normal in ``s.ns`` is the one where it left. ``part``: ``LIGHT_SAMPLE``
-    keeps only the light sample (``out.shadow``; ``out.path`` is the state it saw, not advanced), ``BSDF_SAMPLE``
-    only the BSDF sample (``out.shadow.on`` False): neither needs the other's results, and both draw
-    the vertex's numbers, dispersion and the moved vertex as the whole does, so two kernels over one
-    queue, the light part's first, compute what the whole computes (the wavefront's split shaders)."""
+    with ``bumped`` the bump step's normal in ``s.ns`` is the one where it left. ``part``:
+    ``LIGHT_SAMPLE`` keeps only the light sample (``out.shadow``; ``out.path`` is the state it saw,
+    not advanced), ``BSDF_SAMPLE`` only the BSDF sample (``out.shadow.on`` False). Neither needs the
+    other's results, and both draw the vertex's numbers, take dispersion and the moved vertex as the
+    whole does, so two kernels over one queue, the light part's first, compute what the whole
+    computes (the wavefront's split shaders); ``WHOLE`` generates the code it always did."""
     shaded = features if kind is None else dataclasses.replace(features, materials=(kind,))
     draw_sss = features.subsurface
     has_sss = any(moves_vertex(features, k) for k in shaded.materials)

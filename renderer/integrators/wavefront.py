@@ -7,7 +7,9 @@ hits), ``hits`` (light that escaped or was hit, the end at the maximum depth, mi
 the material that shades), ``bump`` in scenes with bump maps (the bump-mapped shading normal of
 the paths whose material has one, so the shading kernels hold no texture program for it), one
 ``shade_<kind>`` per material kind of the scene (a vertex of that kind: its BSDF, dispersion,
-the light sample's shadow ray and the BSDF sample that continues the path), each after a
+the light sample's shadow ray and the BSDF sample that continues the path; for the kinds whose one
+kernel spills past 1 KB (``split_shading``) two kernels over its queue, ``light_<kind>`` the light
+sample and then ``shade_<kind>`` the BSDF sample, so neither holds the other's code), each after a
 ``probe_<kind>`` for the kinds whose vertex subsurface scattering may move (the subsurface step
 and its probe rays through the BVH, so the shading kernel holds no BVH traversal),
 ``shadow`` (the shadow rays, and what they let through) and ``lenses`` in scenes with thin slabs
@@ -189,9 +191,9 @@ def bump_kernel(features: Features) -> wp.Kernel:
 @lru_cache(maxsize=None)
 def shade_kernel(features: Features, independent: bool, shader: Shader, part: str = WHOLE) -> wp.Kernel:
     """A shader's vertex (``WHOLE``), or one part of it (``scatter_function``'s ``part``):
-    ``LIGHT_SAMPLE`` (``light_<kind>``: the light sample's shadow ray, with media the medium it starts in; the path is
-    not stored) or ``BSDF_SAMPLE`` (the path's next ray, its medium, roulette), the light part's
-    kernel launched first over the same queue, on the path state both load."""
+    ``LIGHT_SAMPLE`` (``light_<kind>``: the light sample's shadow ray, with media the medium it
+    starts in; the path is not stored) or ``BSDF_SAMPLE`` (the path's next ray, its medium,
+    roulette), the light part's kernel launched first over the same queue, on the path state both load."""
     kind = shader.kind
     probed = moves_vertex(features, kind)       # the probe step moved its vertex
     bumped = features.bump                      # its normal from the bump step (where the probe left it)
@@ -381,7 +383,8 @@ class Wavefront:
         depth: after ``hits``, the shading queues; after shading, the rays and shadow rays to
         trace); the loop ends when no path is left to trace, by ``max_depth`` at the latest. The probe
         steps run first, then the bump step (where the probes left the vertices), then the shading
-        kernels; the lens step after the shadow kernel; with media the medium step runs between
+        kernels (a split shader's light sample before its BSDF sample, which advances the path); the
+        lens step after the shadow kernel; with media the medium step runs between
         ``intersect`` and ``hits`` (one more read of a queue's length), and the paths it or ``hits``
         redirected join the rays that shading continues."""
         k, paths, dev = self.kernels, self.buffers[slot], self.device
