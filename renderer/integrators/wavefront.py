@@ -37,7 +37,8 @@ from renderer.geometry.intersect import surface_at
 from renderer.geometry.offsets import offset_origin
 from renderer.integrators.media_path import crossed, is_interface, media_functions, scattered_path, start_medium
 from renderer.integrators.path_state import (ARRIVED, BUMPS, FIRST_KIND, LENSES, RAYS, REDIRECTED, SHADOWS,
-                                             PathBuffers, load_path, path_buffers, push, push_shadow, store_path)
+                                             PathBuffers, load_path, path_buffers, push, push_shadow, store_path,
+                                             store_scattered)
 from renderer.integrators.shader_queues import (Shader, light_name, queue_chooser, queues_of_kinds, shader_features,
                                                 shaders, split_shading)
 from renderer.integrators.shading import bump_normal
@@ -222,7 +223,7 @@ def shade_kernel(features: Features, independent: bool, shader: Shader, part: st
             moved = paths.exit[i]
         sc = scatter(scene, smp, ps, load_path(paths, i), hit, s, m, rr_depth, rr_mean, moved)
         if wp.static(continues):
-            store_path(paths, i, sc.path)
+            store_scattered(paths, i, sc.path)
         if sc.shadow.on:
             push_shadow(paths, i, sc.shadow)
         if wp.static(media):            # which side of the surface the shadow ray and the path leave by
