@@ -163,20 +163,27 @@ def load_path(b: PathBuffers, i: int) -> PathState:
 
 
 @wp.func
-def store_path(b: PathBuffers, i: int, st: PathState):
+def store_scattered(b: PathBuffers, i: int, st: PathState):
+    """What a shaded vertex changes: not the radiance (the shadow kernel adds to it) nor the filter's
+    weight, so a shading kernel need not keep them live from its load to its store."""
     b.o[i] = st.o
     b.d[i] = st.d
-    b.L[i] = st.L
     b.beta[i] = st.beta
     b.prev_p[i] = st.prev_p
     b.eta_scale[i] = st.eta_scale
     b.prev_pdf[i] = st.prev_pdf
     b.prev_specular[i] = st.prev_specular
     b.hero[i] = st.hero
-    b.weight[i] = st.weight
     b.depth[i] = st.depth
     b.rays[i] = st.rays
     b.rng[i] = st.rng
+
+
+@wp.func
+def store_path(b: PathBuffers, i: int, st: PathState):
+    store_scattered(b, i, st)
+    b.L[i] = st.L
+    b.weight[i] = st.weight
 
 
 @wp.func

@@ -12,11 +12,19 @@ import warp as wp
 
 from renderer.device.scene import Features, Scene
 from renderer.integrators.path_state import FIRST_KIND
-from renderer.materials import REGISTRY, kind_id, thinfilm
+from renderer.materials import (REGISTRY, coatedconductor, coateddiffuse, conductor, dielectric, disney, kind_id,
+                                subsurface, thinfilm)
 
 THINFILM = wp.constant(kind_id(thinfilm.NAME))
 #: A thin film's flag for the layered walk (its materials' own shading queue, ``Shader.walk``).
 LAYERED = wp.constant(thinfilm.FLAG.layered)
+
+#: Material kinds whose whole shading kernel is over 1 KB of frame in every scene measured (sm_90,
+#: docs/gpu.md "The light sample and the BSDF sample apart"): the film's coating optics, the layered
+#: walk, Disney's lobes, the film on a subsurface body.
+SPLIT_KINDS = frozenset({thinfilm.NAME, disney.NAME, subsurface.NAME, coateddiffuse.NAME, coatedconductor.NAME})
+#: Kinds over it only with rough lobes that count multiple scattering (the every-feature scene's).
+ROUGH_SPLIT_KINDS = frozenset({conductor.NAME, dielectric.NAME})
 
 
 class Shader(NamedTuple):
@@ -78,3 +86,19 @@ def queue_chooser(features: Features, first: int = FIRST_KIND) -> wp.Function:
         return queue
 
     return shading_queue
+
+
+def split_shading(features: Features, shader: Shader) -> bool:
+    """Whether the wavefront shades a vertex of ``shader`` in two kernels over its queue, the light
+    sample (``light_name``) and then the BSDF sample (``Shader.name``), so neither holds the other's
+    lobes and the light sampler: in scenes that sample lights, for the kinds whose one kernel spills
+    past the 1 KB frame (``SPLIT_KINDS``; ``ROUGH_SPLIT_KINDS`` with rough lobes that count multiple
+    scattering). The others fit whole, and a split costs a second load of the material and a launch."""
+    heavy = shader.kind in SPLIT_KINDS or (shader.kind in ROUGH_SPLIT_KINDS and features.multiscatter
+                                           and shader.kind not in features.smooth)
+    return heavy and features.nee and len(features.lights) > 0
+
+
+def light_name(shader: Shader) -> str:
+    """The name of a split shader's light-sample kernel: ``light_<kind>[_walk]``."""
+    return "light_" + shader.name.removeprefix("shade_")

@@ -180,9 +180,14 @@ def moves_vertex(features: Features, kind: str) -> bool:
     return features.subsurface and kind in (disney.NAME, subsurface.NAME)
 
 
+#: The parts of a vertex ``scatter_function`` compiles: both (the megakernel, a shading kernel in one
+#: piece), the light sample alone (NEE) or the BSDF sample alone (the path's next ray).
+WHOLE, LIGHT_SAMPLE, BSDF_SAMPLE = "whole", "light", "bsdf"
+
+
 @lru_cache(maxsize=None)
 def scatter_function(features: Features, independent: bool, kind: str | None = None,
-                     bumped: bool = False, probed: bool = False) -> wp.Function:
+                     bumped: bool = False, probed: bool = False, part: str = WHOLE) -> wp.Function:
     """``scatter(scene, smp, ps, path, hit, s, m, rr_depth, rr_mean, moved) -> Scattered`` at a vertex of material
     ``m`` (of ``kind`` only, when given). The numbers drawn are the scene's: a material that scatters
     below its surface anywhere in the scene takes a subsurface seed at every vertex. ``bumped``: the
@@ -190,7 +195,12 @@ def scatter_function(features: Features, independent: bool, kind: str | None = N
     kernel holds no bump texture program); for a kind whose vertex moves (``moves_vertex``) only
     ``probed``: the wavefront's probe step took the subsurface step (:func:`probe_function`) and
     applied its weight, ``moved`` says where it left the vertex (else ``moved`` is not read), and
-    with ``bumped`` the bump step's normal in ``s.ns`` is the one where it left."""
+    with ``bumped`` the bump step's normal in ``s.ns`` is the one where it left. ``part``:
+    ``LIGHT_SAMPLE`` keeps only the light sample (``out.shadow``; ``out.path`` is the state it saw,
+    not advanced), ``BSDF_SAMPLE`` only the BSDF sample (``out.shadow.on`` False). Neither needs the
+    other's results, and both draw the vertex's numbers, take dispersion and the moved vertex as the
+    whole does, so two kernels over one queue, the light part's first, compute what the whole
+    computes (the wavefront's split shaders); ``WHOLE`` generates the code it always did."""
     shaded = features if kind is None else dataclasses.replace(features, materials=(kind,))
     draw_sss = features.subsurface
     has_sss = any(moves_vertex(features, k) for k in shaded.materials)
@@ -198,7 +208,8 @@ def scatter_function(features: Features, independent: bool, kind: str | None = N
     shading_frame, eval_pdf, sample_bsdf = shading_functions(dataclasses.replace(shaded, bump=False) if bumped
                                                              else shaded)
     sample_light = light_sampler(*dispatch(features.lights, "sample"))
-    light_sampling = features.nee and len(features.lights) > 0
+    light_sampling = features.nee and len(features.lights) > 0 and part != BSDF_SAMPLE
+    light_only = part == LIGHT_SAMPLE
     subsurface_scatter = subsurface_step(shaded)
     dispersion = features.dispersion and dielectric.NAME in shaded.materials
     media = features.media
@@ -293,6 +304,8 @@ def scatter_function(features: Features, independent: bool, kind: str | None = N
 
         # continue the path by sampling the BSDF
         out.path = st
+        if wp.static(light_only):
+            return out
         bs = sample_bsdf(b, wo_l, u_bsdf)
         if bs.pdf <= 0.0:
             return out

@@ -7,7 +7,9 @@ hits), ``hits`` (light that escaped or was hit, the end at the maximum depth, mi
 the material that shades), ``bump`` in scenes with bump maps (the bump-mapped shading normal of
 the paths whose material has one, so the shading kernels hold no texture program for it), one
 ``shade_<kind>`` per material kind of the scene (a vertex of that kind: its BSDF, dispersion,
-the light sample's shadow ray and the BSDF sample that continues the path), each after a
+the light sample's shadow ray and the BSDF sample that continues the path; for the kinds whose one
+kernel spills past 1 KB (``split_shading``) two kernels over its queue, ``light_<kind>`` the light
+sample and then ``shade_<kind>`` the BSDF sample, so neither holds the other's code), each after a
 ``probe_<kind>`` for the kinds whose vertex subsurface scattering may move (the subsurface step
 and its probe rays through the BVH, so the shading kernel holds no BVH traversal),
 ``shadow`` (the shadow rays, and what they let through) and ``lenses`` in scenes with thin slabs
@@ -35,12 +37,15 @@ from renderer.geometry.intersect import surface_at
 from renderer.geometry.offsets import offset_origin
 from renderer.integrators.media_path import crossed, is_interface, media_functions, scattered_path, start_medium
 from renderer.integrators.path_state import (ARRIVED, BUMPS, FIRST_KIND, LENSES, RAYS, REDIRECTED, SHADOWS,
-                                             PathBuffers, load_path, path_buffers, push, push_shadow, store_path)
-from renderer.integrators.shader_queues import Shader, queue_chooser, queues_of_kinds, shader_features, shaders
+                                             PathBuffers, load_path, path_buffers, push, push_shadow, store_path,
+                                             store_scattered)
+from renderer.integrators.shader_queues import (Shader, light_name, queue_chooser, queues_of_kinds, shader_features,
+                                                shaders, split_shading)
 from renderer.integrators.shading import bump_normal
 from renderer.integrators.thin_slab import SLABS_ONLY, crossing, crossing_transmittance, face_walk
 from renderer.integrators.subsurface import DISNEY, SUBSURFACE, Exit, exit_of
-from renderer.integrators.vertex import moves_vertex, path_functions, probe_function, scatter_function
+from renderer.integrators.vertex import (BSDF_SAMPLE, LIGHT_SAMPLE, WHOLE, moves_vertex, path_functions,
+                                        probe_function, scatter_function)
 from renderer.integrators.visibility import ray_queries
 from renderer.media.tracking import ABSORBED, SCATTERED, delta_track
 from renderer.sampling.samplers import PixelSample, SamplerParams
@@ -185,13 +190,19 @@ def bump_kernel(features: Features) -> wp.Kernel:
 
 
 @lru_cache(maxsize=None)
-def shade_kernel(features: Features, independent: bool, shader: Shader) -> wp.Kernel:
+def shade_kernel(features: Features, independent: bool, shader: Shader, part: str = WHOLE) -> wp.Kernel:
+    """A shader's vertex (``WHOLE``), or one part of it (``scatter_function``'s ``part``):
+    ``LIGHT_SAMPLE`` (``light_<kind>``: the light sample's shadow ray, with media the medium it
+    starts in; the path is not stored) or ``BSDF_SAMPLE`` (the path's next ray, its medium,
+    roulette), the light part's kernel launched first over the same queue, on the path state both load."""
     kind = shader.kind
     probed = moves_vertex(features, kind)       # the probe step moved its vertex
     bumped = features.bump                      # its normal from the bump step (where the probe left it)
-    scatter = scatter_function(shader_features(features, shader), independent, kind, bumped, probed)
+    scatter = scatter_function(shader_features(features, shader), independent, kind, bumped, probed, part)
     queue = FIRST_KIND + shaders(features).index(shader)
     media = features.media
+    lights = part != BSDF_SAMPLE
+    continues = part != LIGHT_SAMPLE
 
     def shade(scene: Scene, smp: SamplerParams, paths: PathBuffers, rr_depth: int):
         i = paths.queue[queue, wp.tid()]
@@ -205,20 +216,22 @@ def shade_kernel(features: Features, independent: bool, shader: Shader) -> wp.Ke
         if wp.static(not independent):
             ps = paths.sample[i]
         rr_mean = float(1.0)            # with media, roulette weighs the channels' mean density
-        if wp.static(media):
+        if wp.static(media and continues):
             rr_mean = mean3(paths.media[i].r_u)
         moved = Exit()
         if wp.static(probed):
             moved = paths.exit[i]
         sc = scatter(scene, smp, ps, load_path(paths, i), hit, s, m, rr_depth, rr_mean, moved)
-        store_path(paths, i, sc.path)
+        if wp.static(continues):
+            store_scattered(paths, i, sc.path)
         if sc.shadow.on:
             push_shadow(paths, i, sc.shadow)
         if wp.static(media):            # which side of the surface the shadow ray and the path leave by
             ms = paths.media[i]
             shape = scene.geo.inst_shape[hit.inst]
-            if sc.shadow.on:
-                paths.shadow_medium[i] = crossed(scene, shape, sc.ng, sc.shadow.d, ms.medium)
+            if wp.static(lights):
+                if sc.shadow.on:
+                    paths.shadow_medium[i] = crossed(scene, shape, sc.ng, sc.shadow.d, ms.medium)
             if sc.alive:
                 ms.medium = crossed(scene, shape, sc.ng, sc.path.d, ms.medium)
                 paths.media[i] = ms
@@ -328,7 +341,11 @@ def wavefront_kernels(features: Features, independent: bool) -> dict[str, wp.Ker
     for shader in shaders(features):
         if moves_vertex(features, shader.kind):
             kernels[f"probe_{shader.kind}"] = probe_kernel(features, independent, shader)
-        kernels[shader.name] = shade_kernel(features, independent, shader)
+        if split_shading(features, shader):
+            kernels[light_name(shader)] = shade_kernel(features, independent, shader, LIGHT_SAMPLE)
+            kernels[shader.name] = shade_kernel(features, independent, shader, BSDF_SAMPLE)
+        else:
+            kernels[shader.name] = shade_kernel(features, independent, shader)
     kernels["shadow"] = shadow_kernel(features)
     if lens_step(features):
         kernels["lenses"] = lens_kernel(features)
@@ -356,6 +373,8 @@ class Wavefront:
         self.shaders = [self.kernels[name] for name in names]
         # per shading kernel its probe step's kernel, run first over the same queue (None: none)
         self.probes = [self.kernels.get("probe_" + name.removeprefix("shade_")) for name in names]
+        # per shading kernel its light part's kernel, run before it over the same queue (None: one kernel)
+        self.lights = [self.kernels.get("light_" + name.removeprefix("shade_")) for name in names]
 
     def launch(self, slot: int, scene: Scene, smp: SamplerParams, seed: int, sample_index: int, first_row: int,
                rows: int, max_depth: int, rr_depth: int, film: wp.array, bad_samples: wp.array,
@@ -365,7 +384,8 @@ class Wavefront:
         depth: after ``hits``, the shading queues; after shading, the rays and shadow rays to
         trace); the loop ends when no path is left to trace, by ``max_depth`` at the latest. The probe
         steps run first, then the bump step (where the probes left the vertices), then the shading
-        kernels; the lens step after the shadow kernel; with media the medium step runs between
+        kernels (a split shader's light sample before its BSDF sample, which advances the path); the
+        lens step after the shadow kernel; with media the medium step runs between
         ``intersect`` and ``hits`` (one more read of a queue's length), and the paths it or ``hits``
         redirected join the rays that shading continues."""
         k, paths, dev = self.kernels, self.buffers[slot], self.device
@@ -388,9 +408,10 @@ class Wavefront:
                     wp.launch(probe, dim=int(count), inputs=[scene, smp, paths], device=dev)
             if queued[BUMPS] > 0:
                 wp.launch(k["bump"], dim=int(queued[BUMPS]), inputs=[scene, paths], device=dev)
-            for shade, count in zip(self.shaders, queued[FIRST_KIND:]):
-                if count > 0:
-                    wp.launch(shade, dim=int(count), inputs=[scene, smp, paths, rr_depth], device=dev)
+            for light, shade, count in zip(self.lights, self.shaders, queued[FIRST_KIND:]):
+                for kernel in (light, shade):
+                    if kernel is not None and count > 0:
+                        wp.launch(kernel, dim=int(count), inputs=[scene, smp, paths, rr_depth], device=dev)
             redirected = int(queued[REDIRECTED])
             queued = paths.queued.numpy()
             tracing, shadows = int(queued[RAYS]), int(queued[SHADOWS])

@@ -98,8 +98,8 @@ def test_device_default_and_kernels():
     assert list(render_kernels(features, False, aov=True)) == ["path", "film", "aov"]
     films = upload(load_scene(PBRT / "films_walk.pbrt"), "cpu", 8, 8).features
     assert list(render_kernels(films, False, wavefront=True)) == [
-        "start", "intersect", "hits", "bump", "shade_diffuse", "shade_thinfilm", "shade_thinfilm_walk", "shadow",
-        "finish", "film"]
+        "start", "intersect", "hits", "bump", "shade_diffuse", "light_thinfilm", "shade_thinfilm",
+        "light_thinfilm_walk", "shade_thinfilm_walk", "shadow", "finish", "film"]
     lens = upload(load_scene(PBRT / "thin_slab_shadow.pbrt"), "cpu", 8, 8).features
     assert list(render_kernels(lens, False, wavefront=True))[-4:] == ["shadow", "lenses", "finish", "film"]
     fog = upload(load_scene(PBRT / "media_fog.pbrt"), "cpu", 8, 8).features

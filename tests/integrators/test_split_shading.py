@@ -1,0 +1,69 @@
+"""A shader split into its light sample (``light_<kind>``) and its BSDF sample (``shade_<kind>``) computes
+the one kernel's image: both halves draw the vertex's numbers, take dispersion's wavelength and the
+probe step's moved vertex as the whole does, and only the light half's shadow ray and the BSDF half's
+path are kept. The wavefront splits only the kinds whose one kernel spills past 1 KB
+(``split_shading``); here every shader of each scene is split, so the features those kinds do not
+meet in the test scenes (media: the shadow ray's medium; a dispersive dielectric; the independent
+sampler's stream) are checked against the megakernel too."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from renderer.api import load_scene, render
+from renderer.device.scene import upload
+from renderer.integrators import wavefront
+from renderer.integrators.kernels import render_kernels
+from renderer.session import RenderStats
+
+ROOT = Path(__file__).resolve().parents[2]
+PBRT = ROOT / "tests" / "data" / "pbrt"
+
+#: (scene, sampler or None for the scene's, width, height, spp), as in test_wavefront: media (fog, interfaces,
+#: inside glass), dispersion, the independent sampler, subsurface's probe step with bump maps, the walk's kernel.
+SPLIT_CASES = [
+    (ROOT / "scenes" / "demo.pbrt", "independent", 32, 18, 2),
+    (PBRT / "dispersion.pbrt", "stratified", 24, 24, 2),
+    (PBRT / "bumped_subsurface.pbrt", None, 32, 18, 2),
+    (PBRT / "films_walk.pbrt", None, 32, 18, 2),
+    (PBRT / "media_fog.pbrt", "zsobol", 24, 18, 2),
+    (PBRT / "media_cube.pbrt", None, 36, 16, 2),
+    (PBRT / "media_glass.pbrt", None, 24, 24, 2),
+]
+
+
+@pytest.fixture
+def split_every_shader(monkeypatch):
+    monkeypatch.setattr(wavefront, "split_shading", lambda features, shader: features.nee and len(features.lights) > 0)
+
+
+def test_cases_meet_the_features():
+    features = [upload(load_scene(c[0]), "cpu", 8, 8).features for c in SPLIT_CASES]
+    for flag in ("media", "dispersion", "subsurface", "bump", "layered"):
+        assert any(getattr(f, flag) for f in features), flag
+
+
+@pytest.mark.parametrize("case", SPLIT_CASES, ids=[f"{c[0].stem}-{c[1] or 'scene'}" for c in SPLIT_CASES])
+def test_split_shaders_image_equals_megakernel(case, split_every_shader):
+    path, sampler, w, h, spp = case
+    images, stats = [], []
+    for wf in (False, True):
+        stats.append(RenderStats())
+        images.append(render(load_scene(path), spp=spp, width=w, height=h, sampler=sampler, threads=1, stats=stats[-1],
+                             wavefront=wf))
+    assert images[0].mean() > 0.0
+    assert np.array_equal(images[1], images[0])
+    assert stats[1].rays == stats[0].rays and stats[1].bad_samples == stats[0].bad_samples
+
+
+def test_split_kinds_by_rule():
+    """The beach's disney and thin films are split, its conductor and diffuse are not; the demo is whole."""
+    beach = upload(load_scene(ROOT / "scenes" / "beach.pbrt"), "cpu", 8, 8).features
+    names = list(render_kernels(beach, False, wavefront=True))
+    assert [n for n in names if n.startswith(("light_", "shade_"))] == [
+        "shade_conductor", "shade_diffuse", "light_disney", "shade_disney", "light_thinfilm", "shade_thinfilm",
+        "light_thinfilm_walk", "shade_thinfilm_walk"]
+    demo = upload(load_scene(ROOT / "scenes" / "demo.pbrt"), "cpu", 8, 8).features
+    assert not any(n.startswith("light_") for n in render_kernels(demo, False, wavefront=True))
