@@ -133,8 +133,8 @@ def compile_scene(scene, settings, device: str, arch: str | None, wavefront: boo
 
 
 def _long(name: str) -> bool:
-    """The kernels whose compile takes minutes: a material's shading (wavefront) or the whole path."""
-    return name.startswith("shade_") or name == "path"
+    """The kernels whose compile takes minutes: a material's shading or light sample (wavefront) or the whole path."""
+    return name.startswith(("shade_", "light_")) or name == "path"
 
 
 def _compile_one(arch: int, name: str, kernel, say: Callable[[str], None]) -> CompiledKernel:

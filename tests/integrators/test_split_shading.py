@@ -59,11 +59,15 @@ def test_split_shaders_image_equals_megakernel(case, split_every_shader):
 
 
 def test_split_kinds_by_rule():
-    """The beach's disney and thin films are split, its conductor and diffuse are not; the demo is whole."""
-    beach = upload(load_scene(ROOT / "scenes" / "beach.pbrt"), "cpu", 8, 8).features
-    names = list(render_kernels(beach, False, wavefront=True))
-    assert [n for n in names if n.startswith(("light_", "shade_"))] == [
-        "shade_conductor", "shade_diffuse", "light_disney", "shade_disney", "light_thinfilm", "shade_thinfilm",
-        "light_thinfilm_walk", "shade_thinfilm_walk"]
+    """Thin films (walking or not), Disney and the coated materials are split, diffuse is not; the
+    demo's conductor, dielectric and diffuse are whole."""
+    def shading(scene: str) -> list[str]:
+        features = upload(load_scene(ROOT / "tests" / "data" / "pbrt" / scene), "cpu", 8, 8).features
+        return [n for n in render_kernels(features, False, wavefront=True) if n.startswith(("light_", "shade_"))]
+
+    assert shading("films_walk.pbrt") == ["shade_diffuse", "light_thinfilm", "shade_thinfilm", "light_thinfilm_walk",
+                                          "shade_thinfilm_walk"]
+    assert shading("bumped_subsurface.pbrt") == ["shade_diffuse", "light_disney", "shade_disney"]
+    assert shading("coatedconductor.pbrt") == ["light_coatedconductor", "shade_coatedconductor", "shade_diffuse"]
     demo = upload(load_scene(ROOT / "scenes" / "demo.pbrt"), "cpu", 8, 8).features
     assert not any(n.startswith("light_") for n in render_kernels(demo, False, wavefront=True))
