@@ -35,8 +35,20 @@ SPLIT_CASES = [
 
 
 @pytest.fixture
-def split_every_shader(monkeypatch):
+def split_every_shader(monkeypatch) -> list[str]:
+    """Splits every shader of a scene that samples lights; returns the names of the wavefront kernels
+    built, so a test sees that the split kernels are the ones that ran."""
+    built: list[str] = []
+    whole = wavefront.wavefront_kernels
+
+    def recorded(features, independent):
+        kernels = whole(features, independent)
+        built.extend(kernels)
+        return kernels
+
     monkeypatch.setattr(wavefront, "split_shading", lambda features, shader: features.nee and len(features.lights) > 0)
+    monkeypatch.setattr(wavefront, "wavefront_kernels", recorded)
+    return built
 
 
 def test_cases_meet_the_features():
@@ -54,6 +66,7 @@ def test_split_shaders_image_equals_megakernel(case, split_every_shader):
         images.append(render(load_scene(path), spp=spp, width=w, height=h, sampler=sampler, threads=1, stats=stats[-1],
                              wavefront=wf))
     assert images[0].mean() > 0.0
+    assert any(name.startswith("light_") for name in split_every_shader), split_every_shader
     assert np.array_equal(images[1], images[0])
     assert stats[1].rays == stats[0].rays and stats[1].bad_samples == stats[0].bad_samples
 
