@@ -2,12 +2,13 @@
 material's BSDF sampling in one thread, too much for a GPU's registers, so here (the wavefront's
 design) per sample ``aov_hits`` finds each pixel's first surface, adds its shading normal and depth
 and queues the pixel by its material's shader; in scenes with bump maps ``aov_bump`` (the
-wavefront's bump step) gives the pixels whose material has one their bump-mapped shading frame
-and normal, so ``aov_hits`` holds no texture program for it (the every-feature ``aov_hits`` had
-three: cut-outs, mixes and bump, 1.1 KB of frame); one ``aov_<kind>`` per shader (``shaders``:
-thin films that walk apart) samples the BSDF and adds the clamped weight; ``aov_guides`` writes the
-guides and the ids. The host launches the samples in order, so each pixel's sums are added in the
-one-kernel order, with the same functions: the same bits (tested on the CPU)."""
+wavefront's bump step) gives the pixels whose material has one their bump-mapped shading frame and
+normal, so ``aov_hits`` holds no texture program for it (with the cut-outs' and the mixes' as well,
+the every-feature ``aov_hits`` had a 1,136 B frame; 880 B without it: docs/gpu.md); one
+``aov_<kind>`` per shader (``shaders``: thin films that walk apart) samples the BSDF and adds the
+clamped weight; ``aov_guides`` writes the guides and the ids. The host launches the samples in
+order, so each pixel's sums are added in the one-kernel order, with the same functions: the same
+bits (tested on the CPU)."""
 from __future__ import annotations
 
 import dataclasses
