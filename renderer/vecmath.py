@@ -1,5 +1,7 @@
-"""Small device math every kernel shares: π and a few vector reductions."""
+"""Small device math every kernel shares: π, a few vector reductions and run-time indexing."""
 from __future__ import annotations
+
+from typing import Any
 
 import warp as wp
 
@@ -28,3 +30,24 @@ def luminance(c: wp.vec3) -> float:
 @wp.func
 def max_abs(p: wp.vec3) -> float:
     return max3(wp.vec3(wp.abs(p[0]), wp.abs(p[1]), wp.abs(p[2])))
+
+
+@wp.func
+def component(v: Any, i: int):
+    """``v[i]`` for an index known only at run time (a colour channel, an axis), read without
+    indexing: CUDA keeps a vector indexed at run time in the stack frame, not in registers."""
+    return wp.where(i == 0, v[0], wp.where(i == 1, v[1], v[2]))
+
+
+@wp.func
+def added(v: Any, i: int, x: Any):
+    """``v`` with ``x`` added to component ``i`` (known only at run time), each write at a constant
+    index (``component``'s reason)."""
+    out = v
+    if i == 0:
+        out[0] = v[0] + x
+    elif i == 1:
+        out[1] = v[1] + x
+    else:
+        out[2] = v[2] + x
+    return out

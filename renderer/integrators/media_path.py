@@ -175,9 +175,10 @@ def media_functions(features: Features) -> MediaFunctions:
         """The closest hit that is not an interface (what the AOVs show; t from o)."""
         origin = o
         travelled = float(0.0)
-        hit = closest(scene, origin, d, t_max)
-        for _k in range(MAX_CROSSINGS):
-            if hit.inst < 0:
+        hit = Hit()
+        for k in range(MAX_CROSSINGS + 1):     # one call site: the query is inlined once
+            hit = closest(scene, origin, d, t_max - travelled)
+            if hit.inst < 0 or k == MAX_CROSSINGS:
                 break
             shape = scene.geo.inst_shape[hit.inst]
             if not is_interface(scene, shape):
@@ -186,7 +187,6 @@ def media_functions(features: Features) -> MediaFunctions:
             step = offset_origin(s, d)
             travelled += wp.dot(step - origin, d)
             origin = step
-            hit = closest(scene, origin, d, t_max - travelled)
         hit.t = hit.t + travelled
         return hit
 

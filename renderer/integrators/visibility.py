@@ -27,9 +27,12 @@ MAX_SKIPS = 64
 @wp.func
 def trace(scene: Scene, o: wp.vec3, d: wp.vec3, t_max: float) -> Hit:
     """The closest hit within (0, t_max) that alpha keeps; t is measured from ``o``."""
-    hit = intersect(scene.geo, o, d, t_max)
     travelled = float(0.0)
-    for _k in range(MAX_SKIPS):
+    hit = Hit()
+    for k in range(MAX_SKIPS + 1):     # one call site: the traversal is inlined once
+        hit = intersect(scene.geo, o, d, t_max - travelled)
+        if k == MAX_SKIPS:
+            break
         if hit.inst < 0:
             return hit
         shape = scene.geo.inst_shape[hit.inst]
@@ -46,7 +49,6 @@ def trace(scene: Scene, o: wp.vec3, d: wp.vec3, t_max: float) -> Hit:
         step = offset_origin(s, d)
         travelled += wp.dot(step - o, d)
         o = step
-        hit = intersect(scene.geo, o, d, t_max - travelled)
     hit.t = hit.t + travelled
     return hit
 

@@ -22,7 +22,7 @@ import warp as wp
 from renderer.media.device import (CLOUD, HOMOGENEOUS, LOG_T_MIN, LOG_T_STEP, NANOVDB, RGBGRID, TABLE_LAST,
                                    UNIFORMGRID, Media)
 from renderer.textures.noise import noise
-from renderer.vecmath import mean3
+from renderer.vecmath import added, component, mean3
 
 #: what delta tracking ends with
 PASSED, SCATTERED, ABSORBED = wp.constant(0), wp.constant(1), wp.constant(2)
@@ -231,21 +231,20 @@ def next_cell(media: Media, w: Majorants) -> Majorants:
         return r
     c = r.cell
     r.sigma = media.maj[r.first + (c[2] * r.res[1] + c[1]) * r.res[0] + c[0]]
-    a = int(0)
-    if r.next_t[1] < r.next_t[a]:
+    a = int(0)          # the axis crossed next, read and written through component/added
+    if r.next_t[1] < r.next_t[0]:
         a = 1
-    if r.next_t[2] < r.next_t[a]:
+    if r.next_t[2] < component(r.next_t, a):
         a = 2
     r.t0 = r.t
-    r.t1 = wp.min(r.next_t[a], r.t_end)
+    r.t1 = wp.min(component(r.next_t, a), r.t_end)
     r.t = r.t1
     if r.t < r.t_end:
-        c[a] = c[a] + r.step[a]
-        nt = r.next_t
-        nt[a] = nt[a] + r.delta_t[a]
-        r.next_t = nt
+        c = added(c, a, component(r.step, a))
+        r.next_t = added(r.next_t, a, component(r.delta_t, a))
         r.cell = c
-        if c[a] < 0 or c[a] >= r.res[a]:
+        ca = component(c, a)
+        if ca < 0 or ca >= component(r.res, a):
             r.t_end = r.t
     return r
 
@@ -298,7 +297,7 @@ def next_collision(media: Media, f: Flight) -> Flight:
             r.t = r.cells.t0
             r.in_cell = True
         sigma = r.cells.sigma
-        sm = sigma[r.c]
+        sm = component(sigma, r.c)
         t_next = float(INF)
         if sm > 0.0:
             t_next = r.t - wp.log(1.0 - wp.randf(state)) / sm
@@ -341,11 +340,12 @@ def delta_track(media: Media, mi: int, o: wp.vec3, d: wp.vec3, t_max: float, c: 
         if not f.hit:
             break
         T_maj = f.T_maj
-        sm = f.sigma[c]
+        T_c = component(T_maj, c)
+        sm = component(f.sigma, c)
         p = o + d * f.t
         mp = properties(media, mi, p)
         if emit and wp.max(mp.Le) > 0.0:
-            pdf = sm * T_maj[c]
+            pdf = sm * T_c
             r_e = wp.cw_mul(res.r_u, wp.cw_mul(f.sigma, T_maj)) / pdf
             if mean3(r_e) > 0.0:
                 res.L = res.L + wp.cw_mul(wp.cw_mul(res.beta, T_maj) / pdf, wp.cw_mul(mp.sigma_a, mp.Le)) \
@@ -353,19 +353,20 @@ def delta_track(media: Media, mi: int, o: wp.vec3, d: wp.vec3, t_max: float, c: 
         state = f.rng
         um = wp.randf(state)
         f.rng = state
-        p_absorb = mp.sigma_a[c] / sm
+        p_absorb = component(mp.sigma_a, c) / sm
         if um < p_absorb:
             res.event = ABSORBED
             break
-        if um < p_absorb + mp.sigma_s[c] / sm:
-            pdf = T_maj[c] * mp.sigma_s[c]
+        s_c = component(mp.sigma_s, c)
+        if um < p_absorb + s_c / sm:
+            pdf = T_c * s_c
             res.beta = wp.cw_mul(res.beta, wp.cw_mul(T_maj, mp.sigma_s)) / pdf
             res.r_u = wp.cw_mul(res.r_u, wp.cw_mul(T_maj, mp.sigma_s)) / pdf
             res.event = SCATTERED
             res.p = p
             break
         sigma_n = wp.max(f.sigma - mp.sigma_a - mp.sigma_s, wp.vec3(0.0))
-        pdf = T_maj[c] * sigma_n[c]
+        pdf = T_c * component(sigma_n, c)
         if pdf <= 0.0:
             res.event = ABSORBED
             break
@@ -374,9 +375,10 @@ def delta_track(media: Media, mi: int, o: wp.vec3, d: wp.vec3, t_max: float, c: 
         f.T_maj = wp.vec3(1.0)
     if res.event == PASSED:
         # the weight of reaching t_max: T_maj over its probability T_maj[c]
-        if f.T_maj[c] > 0.0:
-            res.beta = wp.cw_mul(res.beta, f.T_maj) / f.T_maj[c]
-            res.r_u = wp.cw_mul(res.r_u, f.T_maj) / f.T_maj[c]
+        T_c = component(f.T_maj, c)
+        if T_c > 0.0:
+            res.beta = wp.cw_mul(res.beta, f.T_maj) / T_c
+            res.r_u = wp.cw_mul(res.r_u, f.T_maj) / T_c
         else:
             res.event = ABSORBED
     res.rng = f.rng
@@ -405,7 +407,7 @@ def ratio_track(media: Media, mi: int, o: wp.vec3, d: wp.vec3, t_max: float, c: 
             break
         mp = properties(media, mi, o + d * f.t)
         sigma_n = wp.max(f.sigma - mp.sigma_a - mp.sigma_s, wp.vec3(0.0))
-        pdf = f.T_maj[c] * f.sigma[c]
+        pdf = component(f.T_maj, c) * component(f.sigma, c)
         res.T = wp.cw_mul(res.T, wp.cw_mul(f.T_maj, sigma_n)) / pdf
         res.r = wp.cw_mul(res.r, wp.cw_mul(f.T_maj, f.sigma)) / pdf
         f.T_maj = wp.vec3(1.0)
@@ -419,9 +421,10 @@ def ratio_track(media: Media, mi: int, o: wp.vec3, d: wp.vec3, t_max: float, c: 
         if wp.max(res.T) <= 0.0:
             break
     if wp.max(res.T) > 0.0:
-        if f.T_maj[c] > 0.0:
-            res.T = wp.cw_mul(res.T, f.T_maj) / f.T_maj[c]
-            res.r = wp.cw_mul(res.r, f.T_maj) / f.T_maj[c]
+        T_c = component(f.T_maj, c)
+        if T_c > 0.0:
+            res.T = wp.cw_mul(res.T, f.T_maj) / T_c
+            res.r = wp.cw_mul(res.r, f.T_maj) / T_c
         else:
             res.T = wp.vec3(0.0)
     res.rng = f.rng

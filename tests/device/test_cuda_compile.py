@@ -183,6 +183,29 @@ def test_media_steps_fit_the_target():
         assert row.resources.stack_bytes <= TARGET.stack_bytes, (row.name, row.resources)
 
 
+def test_every_feature_medium_and_aov_first_hit_fit_the_target():
+    """With every feature at once (``benchmarks/gpu_kernels.py``'s: every light kind, cut-outs,
+    mixes, bump maps, media), the medium step and the AOV pass's first hit and bump step fit the
+    design's budget. The medium step was 1,088 B of frame: tracking read its colour channel and its
+    majorant grid's axis at run time (vectors kept in the frame) and the cut-outs' query inlined its
+    traversal twice; the first hit was 1,472 B: two traversals per query, and three texture programs
+    (cut-outs, mixes, bump maps) until bump maps went to ``aov_bump`` (docs/gpu.md, "The media step
+    and the AOVs' first hit with every feature"). Only these three kernels compile (about a minute)."""
+    import importlib.util
+
+    from renderer.integrators.aov_steps import aov_bump_kernel, aov_hits_kernel
+    from renderer.integrators.wavefront import medium_kernel
+
+    spec = importlib.util.spec_from_file_location("gpu_kernels", ROOT / "benchmarks" / "gpu_kernels.py")
+    gpu_kernels = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(gpu_kernels)
+    every = gpu_kernels.every_feature()
+    kernels = {"medium": medium_kernel(every), "aov_hits": aov_hits_kernel(every), "aov_bump": aov_bump_kernel(every)}
+    for row in compile_kernels(kernels, [90]):
+        assert row.resources.registers <= TARGET.registers, (row.name, row.resources)
+        assert row.resources.stack_bytes <= TARGET.stack_bytes, (row.name, row.resources)
+
+
 @pytest.mark.parametrize("scene", ["films_walk.pbrt", "coatedconductor.pbrt"])
 def test_split_shading_scenes_fit_the_target(capsys, scene):
     """What a CUDA render with ``--denoise`` launches for the materials the wavefront shades in two
