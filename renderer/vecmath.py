@@ -1,4 +1,5 @@
-"""Small device math every kernel shares: π and a few vector reductions."""
+"""Small device math every kernel shares: π, a few vector reductions, and a vector's component at
+an index known only at run time."""
 from __future__ import annotations
 
 import warp as wp
@@ -28,3 +29,15 @@ def luminance(c: wp.vec3) -> float:
 @wp.func
 def max_abs(p: wp.vec3) -> float:
     return max3(wp.vec3(wp.abs(p[0]), wp.abs(p[1]), wp.abs(p[2])))
+
+
+@wp.func
+def component(v: wp.vec3, i: int) -> float:
+    """v[i] for a run-time i by selects: indexed directly, CUDA keeps the vector in local memory."""
+    return wp.where(i == 0, v[0], wp.where(i == 1, v[1], v[2]))
+
+
+@wp.func
+def with_component(v: wp.vec3, i: int, x: float) -> wp.vec3:
+    """v with component i (a run-time index) set to x, by selects (see ``component``)."""
+    return wp.vec3(wp.where(i == 0, x, v[0]), wp.where(i == 1, x, v[1]), wp.where(i == 2, x, v[2]))
