@@ -128,18 +128,18 @@ def _tabulated_pdf(b: BSDF, m: Medium, delta: wp.vec3, f_s: wp.vec3, f_t: wp.vec
     r_s = wp.sqrt(y * y + z * z)
     r_t = wp.sqrt(z * z + x * x)
     r_n = wp.sqrt(x * x + y * y)
+    r_axis = wp.vec3(r_n, r_s, r_t)
+    cos_axis = wp.vec3(wp.abs(wp.dot(n_i, f_n)), wp.abs(wp.dot(n_i, f_s)), wp.abs(wp.dot(n_i, f_t)))
     pdf = float(0.0)
-    for c in range(3):
+    for k in range(9):      # channel k // 3, axis k % 3 (the normal, then the tangents): one profile site
+        c = k // 3
+        axis = k % 3
         rm = component(m.r_max, c)
-        rho = component(m.rho, c)
-        st = component(m.sigma_t, c)
-        if rm > 0.0:
-            if r_n < rm:
-                pdf += P_NORMAL * profile(b.layers, b.table_first, rho, st, r_n)[1] * wp.abs(wp.dot(n_i, f_n))
-            if r_s < rm:
-                pdf += 0.5 * (1.0 - P_NORMAL) * profile(b.layers, b.table_first, rho, st, r_s)[1] * wp.abs(wp.dot(n_i, f_s))
-            if r_t < rm:
-                pdf += 0.5 * (1.0 - P_NORMAL) * profile(b.layers, b.table_first, rho, st, r_t)[1] * wp.abs(wp.dot(n_i, f_t))
+        r = component(r_axis, axis)
+        if rm > 0.0 and r < rm:
+            p_axis = wp.where(axis == 0, P_NORMAL, 0.5 * (1.0 - P_NORMAL))
+            pdf += p_axis * profile(b.layers, b.table_first, component(m.rho, c), component(m.sigma_t, c), r)[1] \
+                * component(cos_axis, axis)
     return pdf / 3.0
 
 
@@ -277,9 +277,10 @@ def tabulated_scatter(coated: bool) -> wp.Function:
             ev.weight = wp.vec3(0.0)
             return ev
         dist = wp.length(delta)
-        sp = wp.vec3(profile(b.layers, b.table_first, m.rho[0], m.sigma_t[0], dist)[0],
-                     profile(b.layers, b.table_first, m.rho[1], m.sigma_t[1], dist)[0],
-                     profile(b.layers, b.table_first, m.rho[2], m.sigma_t[2], dist)[0])
+        sp = wp.vec3(0.0)
+        for c in range(3):
+            sp = with_component(sp, c, profile(b.layers, b.table_first, component(m.rho, c), component(m.sigma_t, c),
+                                               dist)[0])
         if wp.static(coated):
             if (b.flags & pbrt_subsurface.FILM) != 0:
                 ev.weight = wp.cw_mul(m.to_rgb * sp, w_in) * (float(probe.found) / (q * pdf))
