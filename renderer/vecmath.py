@@ -1,4 +1,5 @@
-"""Small device math every kernel shares: π, a few vector reductions and run-time indexing."""
+"""Small device math every kernel shares: π, a few vector reductions, and a vector's component at
+an index known only at run time."""
 from __future__ import annotations
 
 from typing import Any
@@ -51,3 +52,9 @@ def added(v: Any, i: int, x: Any):
     else:
         out[2] = v[2] + x
     return out
+
+
+@wp.func
+def with_component(v: wp.vec3, i: int, x: float) -> wp.vec3:
+    """v with component i (a run-time index) set to x, by selects (see ``component``)."""
+    return wp.vec3(wp.where(i == 0, x, v[0]), wp.where(i == 1, x, v[1]), wp.where(i == 2, x, v[2]))

@@ -30,7 +30,7 @@ from renderer.optics.dispersion import sample_wavelength, wavelength_weight
 from renderer.optics.fresnel import fresnel_dielectric
 from renderer.sampling.frames import frame_from_tangent, to_local
 from renderer.sampling.rng import hash_u32
-from renderer.vecmath import PI
+from renderer.vecmath import PI, component, with_component
 
 # --- pbrt-v4's subsurface material -------------------------------------------------------------
 
@@ -67,32 +67,32 @@ def _spectrum(row: wp.vec4, lam: float) -> float:
 @wp.func
 def _body(b: BSDF, u_lambda: float) -> Medium:
     """sigma_s / sigma_t and sigma_t from the coefficients times scale, or from reflectance and mfp
-    (the albedo whose effective albedo is the reflectance, sigma_t = 1 / (scale mfp)), per channel."""
+    (the albedo whose effective albedo is the reflectance, sigma_t = 1 / (scale mfp)), per channel.
+    The slots are read at constant rows and the channels set by selects: a run-time index into
+    either would keep them in local memory on CUDA (four copies of the 192 B slots, docs/gpu.md)."""
     m = Medium()
-    m.to_rgb = wp.identity(n=3, dtype=float)
     scale = b.p[SSS_SLOT.scale][0]
     rows = b.layers
     first = b.table_first
     from_reflectance = (b.flags & pbrt_subsurface.FROM_REFLECTANCE) != 0
     spectral = (b.flags & pbrt_subsurface.SPECTRAL) != 0
+    xs = wp.where(from_reflectance, b.p[SSS_SLOT.reflectance], b.p[SSS_SLOT.sigma_a])  # sigma_a, or the reflectance
+    ys = wp.where(from_reflectance, b.p[SSS_SLOT.mfp], b.p[SSS_SLOT.sigma_s])          # sigma_s, or the mean free path
+    to_r = wp.vec3(1.0, 0.0, 0.0)   # the rows of to_rgb
+    to_g = wp.vec3(0.0, 1.0, 0.0)
+    to_b = wp.vec3(0.0, 0.0, 1.0)
     for c in range(3):
-        x = float(0.0)       # sigma_a, or the reflectance
-        y = float(0.0)       # sigma_s, or the mean free path
+        x = component(xs, c)
+        y = component(ys, c)
         if spectral:
             hs = sample_wavelength((float(c) + u_lambda) / 3.0)
             lam = hs[0]
             x = _spectrum(rows[first + PROFILE_ROWS], lam)
             y = _spectrum(rows[first + PROFILE_ROWS + 1], lam)
             w = wavelength_weight(b.spectral, hs) / 3.0
-            m.to_rgb[0, c] = w[0]
-            m.to_rgb[1, c] = w[1]
-            m.to_rgb[2, c] = w[2]
-        elif from_reflectance:
-            x = b.p[SSS_SLOT.reflectance][c]
-            y = b.p[SSS_SLOT.mfp][c]
-        else:
-            x = b.p[SSS_SLOT.sigma_a][c]
-            y = b.p[SSS_SLOT.sigma_s][c]
+            to_r = with_component(to_r, c, w[0])
+            to_g = with_component(to_g, c, w[1])
+            to_b = with_component(to_b, c, w[2])
         rho = float(0.0)
         st = float(0.0)
         if from_reflectance:
@@ -106,10 +106,13 @@ def _body(b: BSDF, u_lambda: float) -> Medium:
             st = sa + ss
             if st > 0.0:
                 rho = ss / st
-        m.rho[c] = rho
-        m.sigma_t[c] = st
+        r_max = float(0.0)
         if st > 0.0:
-            m.r_max[c] = probe_radius(rows, first, rho) / st
+            r_max = probe_radius(rows, first, rho) / st
+        m.rho = with_component(m.rho, c, rho)
+        m.sigma_t = with_component(m.sigma_t, c, st)
+        m.r_max = with_component(m.r_max, c, r_max)
+    m.to_rgb = wp.matrix_from_rows(to_r, to_g, to_b)
     return m
 
 
@@ -125,16 +128,18 @@ def _tabulated_pdf(b: BSDF, m: Medium, delta: wp.vec3, f_s: wp.vec3, f_t: wp.vec
     r_s = wp.sqrt(y * y + z * z)
     r_t = wp.sqrt(z * z + x * x)
     r_n = wp.sqrt(x * x + y * y)
+    r_axis = wp.vec3(r_n, r_s, r_t)
+    cos_axis = wp.vec3(wp.abs(wp.dot(n_i, f_n)), wp.abs(wp.dot(n_i, f_s)), wp.abs(wp.dot(n_i, f_t)))
     pdf = float(0.0)
-    for c in range(3):
-        rm = m.r_max[c]
-        if rm > 0.0:
-            if r_n < rm:
-                pdf += P_NORMAL * profile(b.layers, b.table_first, m.rho[c], m.sigma_t[c], r_n)[1] * wp.abs(wp.dot(n_i, f_n))
-            if r_s < rm:
-                pdf += 0.5 * (1.0 - P_NORMAL) * profile(b.layers, b.table_first, m.rho[c], m.sigma_t[c], r_s)[1] * wp.abs(wp.dot(n_i, f_s))
-            if r_t < rm:
-                pdf += 0.5 * (1.0 - P_NORMAL) * profile(b.layers, b.table_first, m.rho[c], m.sigma_t[c], r_t)[1] * wp.abs(wp.dot(n_i, f_t))
+    for k in range(9):      # channel k // 3, axis k % 3 (the normal, then the tangents): one profile site
+        c = k // 3
+        axis = k % 3
+        rm = component(m.r_max, c)
+        r = component(r_axis, axis)
+        if rm > 0.0 and r < rm:
+            p_axis = wp.where(axis == 0, P_NORMAL, 0.5 * (1.0 - P_NORMAL))
+            pdf += p_axis * profile(b.layers, b.table_first, component(m.rho, c), component(m.sigma_t, c), r)[1] \
+                * component(cos_axis, axis)
     return pdf / 3.0
 
 
@@ -179,12 +184,14 @@ def _rgb_effective_albedo(b: BSDF) -> wp.vec3:
     """rho_eff per RGB channel: the reflectance, or the table's at sigma_s / (sigma_a + sigma_s)."""
     if (b.flags & pbrt_subsurface.FROM_REFLECTANCE) != 0:
         return b.p[SSS_SLOT.reflectance]
+    sigma_a = b.p[SSS_SLOT.sigma_a]     # constant rows: see _body
+    sigma_s = b.p[SSS_SLOT.sigma_s]
     out = wp.vec3(0.0)
     for c in range(3):
-        sa = wp.max(b.p[SSS_SLOT.sigma_a][c], 0.0)
-        ss = wp.max(b.p[SSS_SLOT.sigma_s][c], 0.0)
+        sa = wp.max(component(sigma_a, c), 0.0)
+        ss = wp.max(component(sigma_s, c), 0.0)
         if sa + ss > 0.0:
-            out[c] = effective_albedo(b.layers, b.table_first, ss / (sa + ss))
+            out = with_component(out, c, effective_albedo(b.layers, b.table_first, ss / (sa + ss)))
     return out
 
 
@@ -249,11 +256,11 @@ def tabulated_scatter(coated: bool) -> wp.Function:
         u_r = wp.randf(rng)
         phi = 2.0 * PI * wp.randf(rng)
         pa = probe_axes(f, u_axis)
-        rm = m.r_max[ch]
+        rm = component(m.r_max, ch)
         if rm <= 0.0:
             ev.weight = wp.vec3(0.0)
             return ev
-        r = sample_radius(b.layers, b.table_first, m.rho[ch], u_r) / m.sigma_t[ch]
+        r = sample_radius(b.layers, b.table_first, component(m.rho, ch), u_r) / component(m.sigma_t, ch)
         if r < 0.0 or r >= rm:
             ev.weight = wp.vec3(0.0)
             return ev
@@ -270,9 +277,10 @@ def tabulated_scatter(coated: bool) -> wp.Function:
             ev.weight = wp.vec3(0.0)
             return ev
         dist = wp.length(delta)
-        sp = wp.vec3(profile(b.layers, b.table_first, m.rho[0], m.sigma_t[0], dist)[0],
-                     profile(b.layers, b.table_first, m.rho[1], m.sigma_t[1], dist)[0],
-                     profile(b.layers, b.table_first, m.rho[2], m.sigma_t[2], dist)[0])
+        sp = wp.vec3(0.0)
+        for c in range(3):
+            sp = with_component(sp, c, profile(b.layers, b.table_first, component(m.rho, c), component(m.sigma_t, c),
+                                               dist)[0])
         if wp.static(coated):
             if (b.flags & pbrt_subsurface.FILM) != 0:
                 ev.weight = wp.cw_mul(m.to_rgb * sp, w_in) * (float(probe.found) / (q * pdf))

@@ -43,10 +43,16 @@ class Spline:
 
 
 @wp.func
+def _lane(v: wp.vec4, j: int) -> float:
+    """v[j] for a run-time j by selects: indexed directly, CUDA stores the vector to local memory
+    and loads the lane back (four stores and a load per table read, docs/gpu.md)."""
+    return wp.where(j < 2, wp.where(j == 0, v[0], v[1]), wp.where(j == 2, v[2], v[3]))
+
+
+@wp.func
 def table_float(rows: wp.array(dtype=wp.vec4), first: int, i: int) -> float:
     """Float i of a material's table (the floats start after its header row)."""
-    v = rows[first + 1 + i // 4]
-    return v[i % 4]
+    return _lane(rows[first + 1 + i // 4], i % 4)
 
 
 @wp.func
@@ -107,8 +113,9 @@ def _row_mix(rows: wp.array(dtype=wp.vec4), first: int, off: int, a: Spline, col
     """Sum over the four albedo rows of a table (profile or CDF) at one radius column."""
     v = float(0.0)
     for j in range(4):
-        if a.w[j] != 0.0:
-            v += a.w[j] * table_float(rows, first, off + (a.offset + j) * _N_RADIUS + col)
+        w = _lane(a.w, j)
+        if w != 0.0:
+            v += w * table_float(rows, first, off + (a.offset + j) * _N_RADIUS + col)
     return v
 
 
@@ -116,8 +123,9 @@ def _row_mix(rows: wp.array(dtype=wp.vec4), first: int, off: int, a: Spline, col
 def _effective_albedo(rows: wp.array(dtype=wp.vec4), first: int, a: Spline) -> float:
     v = float(0.0)
     for j in range(4):
-        if a.w[j] != 0.0:
-            v += a.w[j] * table_float(rows, first, _OFF_EFF + a.offset + j)
+        w = _lane(a.w, j)
+        if w != 0.0:
+            v += w * table_float(rows, first, _OFF_EFF + a.offset + j)
     return v
 
 
@@ -140,8 +148,9 @@ def profile(rows: wp.array(dtype=wp.vec4), first: int, rho: float, sigma_t: floa
         return wp.vec2(0.0)
     p = float(0.0)
     for k in range(4):
-        if b.w[k] != 0.0:
-            p += b.w[k] * _row_mix(rows, first, _OFF_PROFILE, a, b.offset + k)
+        w = _lane(b.w, k)
+        if w != 0.0:
+            p += w * _row_mix(rows, first, _OFF_PROFILE, a, b.offset + k)
     if r_opt > 0.0:
         p = p / (2.0 * PI * r_opt)
     sr = wp.max(p * sigma_t * sigma_t, 0.0)

@@ -167,6 +167,25 @@ def test_subsurface_probe_step_holds_the_bvh_traversal():
     assert shade.resources.stack_bytes < 1728, shade.resources
 
 
+def test_tabulated_subsurface_probe_fits_the_target():
+    """pbrt-v4's subsurface material's probe step (its tabulated profile, the spline inversion that
+    samples the radius and the spectral body, beside the BVH's probe loop) fits the design's budget
+    under the register cap: 2,256 B of frame in disney_film and translucent_films before the BSDF's
+    slots, the body's channels and the table's rows were read at constant indices (docs/gpu.md,
+    "The tabulated subsurface probe"). Compiled from the smallest scene with the material."""
+    from renderer.api import load_scene
+    from renderer.device.scene import upload
+    from renderer.integrators.shader_queues import shaders
+    from renderer.integrators.wavefront import probe_kernel
+
+    features = upload(load_scene(ROOT / "tests" / "data" / "pbrt" / "subsurface_skin.pbrt"), "cpu", 8, 8).features
+    assert features.subsurface
+    shader = next(sh for sh in shaders(features) if sh.kind == "subsurface")
+    [row] = compile_kernels({"probe_subsurface": probe_kernel(features, True, shader)}, [90])
+    assert row.resources.registers <= TARGET.registers, row.resources
+    assert row.resources.stack_bytes <= TARGET.stack_bytes, row.resources
+
+
 def test_media_steps_fit_the_target():
     """A scene with participating media renders with the wavefront on CUDA: its medium step (delta
     tracking, the light sample and phase sampling at a scattering) and its shadow kernel (ratio
