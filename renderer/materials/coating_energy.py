@@ -31,13 +31,13 @@ from __future__ import annotations
 
 import warp as wp
 
-from renderer.materials.bsdf import BSDFEval, BSDFSample, failed_sample, sampled, GLOSSY
+from renderer.materials.bsdf import BSDFEval, BSDFSample, failed_sample, refract, sampled, GLOSSY
 from renderer.materials.coating import BOTH_SIDES, Coating, coating_eval, coating_rgb, coating_sample
 from renderer.materials.energy import (FACET_NODES, MEAN_NODES, FacetVector, dielectric_albedo,
                                        dielectric_albedo_mean, dielectric_transmit_share, effective_alpha,
                                        extra_direction, facet_weights, facet_weights_mean, mixed_pdf,
                                        node_cosine)
-from renderer.materials.microfacet import is_smooth
+from renderer.materials.microfacet import ggx_sample_visible, is_smooth
 from renderer.optics.fresnel import fresnel_dielectric
 from renderer.vecmath import INV_PI, mean3
 
@@ -212,17 +212,21 @@ def coat_multiple(q: CoatEnergy, alpha: wp.vec2, wi: wp.vec3, rows: wp.array(dty
 def coating_ms_eval(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3, radiance: bool,
                     rows: wp.array(dtype=wp.vec4)) -> BSDFEval:
     """:func:`coating_eval` (both sides) plus the compensation lobe (see above); the density is that
-    of :func:`coating_ms_sample`."""
+    of :func:`coating_ms_sample`. The single-scattering part is evaluated first, so that only its
+    value crosses the 2 (FACET_NODES − 1) calls of :func:`coat_energy` rather than the nodes' 72
+    values the coating's call at wi (docs/gpu.md, "The thin film's nodes")."""
+    ev = coating_eval(c, eta, alpha, wo, wi, BOTH_SIDES, radiance)
     if eta == 1.0 or is_smooth(alpha) or wo[2] == 0.0 or wi[2] == 0.0:
-        return coating_eval(c, eta, alpha, wo, wi, BOTH_SIDES, radiance)
-    return _with_multiple(c, coat_energy(c, eta, alpha, wo, rows), eta, alpha, wo, wi, radiance, rows)
+        return ev
+    return _with_multiple(ev, coat_energy(c, eta, alpha, wo, rows), alpha, wo, wi, radiance, rows)
 
 
 @wp.func
-def _with_multiple(c: Coating, q: CoatEnergy, eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3, radiance: bool,
+def _with_multiple(single: BSDFEval, q: CoatEnergy, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3, radiance: bool,
                    rows: wp.array(dtype=wp.vec4)) -> BSDFEval:
-    """Single scattering plus the lobe, for a wo whose CoatEnergy q is known."""
-    ev = coating_eval(c, eta, alpha, wo, wi, BOTH_SIDES, radiance)
+    """Single scattering (``single``, :func:`coating_eval` at wo and wi) plus the lobe, for a wo whose
+    CoatEnergy q is known."""
+    ev = single
     transmit = wo[2] * wi[2] < 0.0
     f = coat_multiple(q, alpha, wi, rows)
     if transmit and radiance:
@@ -236,22 +240,50 @@ def _with_multiple(c: Coating, q: CoatEnergy, eta: float, alpha: wp.vec2, wo: wp
 def coating_ms_sample(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, u: wp.vec3, radiance: bool,
                       rows: wp.array(dtype=wp.vec4)) -> BSDFSample:
     """:func:`coating_sample` (both sides), or with probability mean L(μo) a cosine-distributed
-    reflection or transmission; weighted by :func:`coating_ms_eval` (its wo terms computed once)."""
+    reflection or transmission; weighted by :func:`coating_ms_eval` (its wo terms computed once).
+
+    The coating's calls are ordered so that the nodes' values cross none of them: the single-scattering
+    facet (a visible normal, as :func:`coating_sample` draws it) and its coating come before
+    :func:`coat_energy` (whether or not that lobe is then chosen), the compensation lobe at wi is
+    reduced before the coating at wi is evaluated, and that evaluation serves both the single-scattering
+    sample's check (:func:`coating_sample` fails where its density is 0) and the weight."""
     if eta == 1.0 or is_smooth(alpha) or wo[2] == 0.0:
         return coating_sample(c, eta, alpha, wo, u, BOTH_SIDES, radiance)
+    wm = ggx_sample_visible(wo, alpha, wp.vec2(u[0], u[1]))
+    r_m, t_m = coating_rgb(c, wp.dot(wo, wm))
+    mean_r = mean3(r_m)
+    mean_t = mean3(t_m)
     q = coat_energy(c, eta, alpha, wo, rows)
     d = extra_direction(wo, u, q.p_ms, q.p_t, q.e)
     wi = wp.vec3(d[0], d[1], d[2])
     eta_t = d[3]
-    if d[3] < 0.0:
-        s = coating_sample(c, eta, alpha, wo, wp.vec3(u[0], u[1], (u[2] - q.p_ms) / (1.0 - q.p_ms)), BOTH_SIDES,
-                           radiance)
-        if s.pdf <= 0.0:
-            return s
-        wi = s.wi
-        eta_t = s.eta
+    single = d[3] < 0.0
+    if single:
+        # coating_sample's rough lobes with u[2] rescaled: reflection or refraction by the mean R and T at wm
+        if mean_r + mean_t <= 0.0:
+            return failed_sample()
+        if (u[2] - q.p_ms) / (1.0 - q.p_ms) * (mean_r + mean_t) < mean_r:
+            wi = wm * (2.0 * wp.dot(wo, wm)) - wo
+            if wi[2] * wo[2] <= 0.0:
+                return failed_sample()
+            eta_t = 0.0
+        else:
+            refr = refract(wo, wm, eta)
+            wi = wp.vec3(refr[0], refr[1], refr[2])
+            if refr[3] == 0.0 or wi[2] * wo[2] >= 0.0:
+                return failed_sample()
+            eta_t = refr[3]
     if wi[2] == 0.0:
         return failed_sample()
-    out = sampled(wo, wi, _with_multiple(c, q, eta, alpha, wo, wi, radiance, rows), GLOSSY)
+    transmit = wo[2] * wi[2] < 0.0
+    f = coat_multiple(q, alpha, wi, rows)
+    if transmit and radiance:
+        f = f / (q.e * q.e)
+    ev = coating_eval(c, eta, alpha, wo, wi, BOTH_SIDES, radiance)
+    if single and ev.pdf <= 0.0:
+        return failed_sample()
+    ev.f = ev.f + f
+    ev.pdf = mixed_pdf(ev.pdf, q.p_ms, q.p_t, transmit, wi)
+    out = sampled(wo, wi, ev, GLOSSY)
     out.eta = eta_t
     return out

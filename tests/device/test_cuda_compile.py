@@ -239,6 +239,29 @@ def test_split_shading_scenes_fit_the_target(capsys, scene):
         assert stack <= TARGET.stack_bytes, (name, stack)
 
 
+def test_rough_multiscattering_films_fit_the_target():
+    """The thin-film kernels of a scene with rough films that count multiple scattering (nacre's;
+    films_walk's rough film does not): the compensation lobe of a clear rough film (compiled in
+    wherever a rough film may multiscatter) reads the coating at 22 node cosines, and its 72 node
+    values crossed the coating's calls at the sampled facet and at wi (``shade_thinfilm`` 1,032 B,
+    ``light_thinfilm`` 960 B before those calls were ordered around the nodes: docs/gpu.md, "The
+    thin film's nodes")."""
+    from renderer.api import load_scene, settings_for
+    from renderer.device.scene import upload
+    from renderer.integrators.kernels import render_kernels
+
+    desc = load_scene(ROOT / "scenes" / "nacre.pbrt")
+    settings = settings_for(desc)
+    features = upload(desc, "cpu", 8, 8, thin_film=settings.thin_film).features
+    assert features.multiscatter and "thinfilm" not in features.smooth
+    kernels = {name: k for name, k in render_kernels(features, settings.sampler.name == "independent", aov=True,
+                                                     wavefront=True).items() if "thinfilm" in name}
+    assert set(kernels) == {"light_thinfilm", "shade_thinfilm", "aov_thinfilm"}, set(kernels)
+    for row in compile_kernels(kernels, [90]):
+        assert row.resources.registers <= TARGET.registers, (row.name, row.resources)
+        assert row.resources.stack_bytes <= TARGET.stack_bytes, (row.name, row.resources)
+
+
 def test_gpu_check_refuses_without_a_gpu():
     import subprocess
     import sys
