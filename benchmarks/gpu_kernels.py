@@ -27,17 +27,6 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT)]
 
 
-def every_feature():
-    """The feature set of a scene that uses every material, light family and kernel option."""
-    from renderer import lights, materials
-    from renderer.device.scene import Features
-
-    kinds = tuple(lights.REGISTRY)
-    return Features(materials=tuple(sorted(materials.REGISTRY)), bump=True, lights=kinds,
-                    escaping=tuple(k for k in kinds if hasattr(lights.REGISTRY[k], "escaped")), nee=True,
-                    subsurface=True, alpha=True, mix=True, dispersion=True, media=True)
-
-
 def scene_features(path: Path):
     from renderer.api import load_scene, settings_for
     from renderer.device.scene import upload
@@ -58,7 +47,7 @@ def main() -> None:
     ap.add_argument("--megakernel", action="store_true", help="the megakernel instead of the wavefront's kernels")
     a = ap.parse_args()
     os.environ["WARP_CACHE_PATH"] = str(a.cache or tempfile.mkdtemp(prefix="gpu_kernels_"))
-    from renderer.device.cuda_compile import compile_kernels, parse_archs, table
+    from renderer.device.cuda_compile import compile_kernels, every_feature, parse_archs, table
     from renderer.integrators.kernels import render_kernels
 
     archs = parse_archs(a.arch)

@@ -44,6 +44,21 @@ TARGET = Budget(registers=128, stack_bytes=1024)
 #: scene's materials reach (Features.multiscatter, .layered, .smooth): 1,104 B (860 KB of code),
 #: and the budget holds that with 48 B to spare.
 BUDGET = Budget(registers=255, stack_bytes=1152)
+
+
+def every_feature():
+    """The feature set of a scene that uses every material, light family and kernel option at once
+    (cut-outs, mixes, bump maps, subsurface, dispersion, media): the kernels the budget must hold
+    whatever a scene combines."""
+    from renderer import lights, materials
+    from renderer.device.scene import Features
+
+    kinds = tuple(lights.REGISTRY)
+    return Features(materials=tuple(sorted(materials.REGISTRY)), bump=True, lights=kinds,
+                    escaping=tuple(k for k in kinds if hasattr(lights.REGISTRY[k], "escaped")), nee=True,
+                    subsurface=True, alpha=True, mix=True, dispersion=True, media=True)
+
+
 #: Seconds between "still compiling" lines: a GPU user must never wait in silence.
 HEARTBEAT_SECONDS = 15.0
 

@@ -11,7 +11,7 @@ import warp as wp
 
 from renderer.cli import main
 from renderer.device.cubin import read_resources, tool
-from renderer.device.cuda_compile import BUDGET, TARGET, compile_kernels, cubin_path, parse_archs
+from renderer.device.cuda_compile import BUDGET, TARGET, compile_kernels, cubin_path, every_feature, parse_archs
 from renderer.device.runtime import init_warp
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -203,22 +203,17 @@ def test_media_steps_fit_the_target():
 
 
 def test_every_feature_medium_and_aov_first_hit_fit_the_target():
-    """With every feature at once (``benchmarks/gpu_kernels.py``'s: every light kind, cut-outs,
+    """With every feature at once (``every_feature``: every light kind, cut-outs,
     mixes, bump maps, media), the medium step and the AOV pass's first hit and bump step fit the
     design's budget. The medium step was 1,088 B of frame: tracking read its colour channel and its
     majorant grid's axis at run time (vectors kept in the frame) and the cut-outs' query inlined its
     traversal twice; the first hit was 1,472 B: two traversals per query, and three texture programs
     (cut-outs, mixes, bump maps) until bump maps went to ``aov_bump`` (docs/gpu.md, "The media step
     and the AOVs' first hit with every feature"). Only these three kernels compile (about a minute)."""
-    import importlib.util
-
     from renderer.integrators.aov_steps import aov_bump_kernel, aov_hits_kernel
     from renderer.integrators.wavefront import medium_kernel
 
-    spec = importlib.util.spec_from_file_location("gpu_kernels", ROOT / "benchmarks" / "gpu_kernels.py")
-    gpu_kernels = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(gpu_kernels)
-    every = gpu_kernels.every_feature()
+    every = every_feature()
     kernels = {"medium": medium_kernel(every), "aov_hits": aov_hits_kernel(every), "aov_bump": aov_bump_kernel(every)}
     for row in compile_kernels(kernels, [90]):
         assert row.resources.registers <= TARGET.registers, (row.name, row.resources)
