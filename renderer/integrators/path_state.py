@@ -76,6 +76,7 @@ class PathBuffers:
     material: wp.array(dtype=int)           # the hit's material, mixes resolved
     ns: wp.array(dtype=wp.vec3)             # the bump step's shading normal (unused without it: 1 entry)
     exit: wp.array(dtype=Exit)              # where the probe step left the vertex (unused without it: 1 entry)
+    entry: wp.array(dtype=wp.vec4)          # a coated body's entry weight and q, for the probe step (1 entry without)
     shadow_o: wp.array(dtype=wp.vec3)
     shadow_d: wp.array(dtype=wp.vec3)
     shadow_t: wp.array(dtype=float)
@@ -96,12 +97,14 @@ RAYS, SHADOWS, BUMPS, LENSES, ARRIVED, REDIRECTED, FIRST_KIND = 0, 1, 2, 3, 4, 5
 
 
 def path_buffers(n: int, sampled: bool, queue_of_kind: list[int], shading_queues: int, device: str,
-                 bumped: bool = False, media: bool = False, probed: bool = False) -> PathBuffers:
+                 bumped: bool = False, media: bool = False, probed: bool = False,
+                 entered: bool = False) -> PathBuffers:
     """Buffers for ``n`` paths; ``sampled``: the scene's sampler (not the independent stream) draws
     the numbers, so each path keeps its pixel sample; ``queue_of_kind``: per material kind id, its
     first shading queue (from FIRST_KIND on; -1: none) of ``shading_queues``; ``bumped``: the bump
     step runs, so each path keeps its shading normal; ``media``: each path keeps its medium state;
-    ``probed``: the probe step runs, so each path keeps where its subsurface step left it."""
+    ``probed``: the probe step runs, so each path keeps where its subsurface step left it;
+    ``entered``: a film's entry step runs before it (renderer.integrators.film_entry)."""
     def a(dtype, count: int | tuple[int, int] = n) -> wp.array:
         return wp.zeros(count, dtype=dtype, device=device)
 
@@ -118,6 +121,7 @@ def path_buffers(n: int, sampled: bool, queue_of_kind: list[int], shading_queues
     b.hit = a(Hit)
     b.ns = a(wp.vec3, n if bumped else 1)
     b.exit = a(Exit, n if probed else 1)
+    b.entry = a(wp.vec4, n if entered else 1)
     b.media = a(MediumState, n if media else 1)
     b.shadow_medium = a(int, n if media else 1)
     b.queue_of_kind = wp.array(queue_of_kind, dtype=int, device=device)
@@ -130,11 +134,11 @@ def path_buffers(n: int, sampled: bool, queue_of_kind: list[int], shading_queues
 def bytes_per_path(sampled: bool, queues: int, bumped: bool = True, media: bool = True, probed: bool = True) -> int:
     """Device memory of :class:`PathBuffers` per path, from its fields' types: every per-path array,
     the pixel sample only when ``sampled``, the shading normal only when ``bumped``, the medium
-    state only with ``media``, the probe step's exit only when ``probed``, and one index in each of
+    state only with ``media``, the probe step's exit (and a film's entry) only when ``probed``, and one index in each of
     ``queues`` queues (the queue counters and the kind table do not grow with the paths)."""
     unused = {"queued", "queue_of_kind"} | ({"sample"} if not sampled else set()) | (
         {"ns"} if not bumped else set()) | ({"media", "shadow_medium"} if not media else set()) | (
-        {"exit"} if not probed else set())
+        {"exit", "entry"} if not probed else set())
     total = 0
     for name, var in PathBuffers.vars.items():
         if name in unused:

@@ -10,6 +10,7 @@ where some material of the scene has one (``Features.coated_body``).
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import NamedTuple
 
 import warp as wp
 
@@ -206,10 +207,19 @@ def _coated_entry_weight(b: BSDF, wo_local: wp.vec3, u: wp.vec3) -> wp.vec3:
     return wp.cw_mul(w, exit_balance(c, eta, _rgb_effective_albedo(b)))
 
 
+class TabulatedStep(NamedTuple):
+    """pbrt-v4's subsurface material's step, whole (``scatter``) or in two parts: the boundary's
+    ``entry(b, s, wo, seed) -> Entry`` and the rest, ``entered(scene, b, s, inst, wo, seed, entry)``."""
+
+    entry: wp.Function
+    entered: wp.Function
+    scatter: wp.Function
+
+
 @lru_cache(maxsize=None)
-def tabulated_scatter(coated: bool) -> wp.Function:
-    """``scatter(scene, b, s, inst, wo, seed) -> SubsurfaceStep`` for pbrt-v4's subsurface material,
-    with a film's boundary (:mod:`renderer.materials.film_body`) compiled in where ``coated``."""
+def tabulated_scatter(coated: bool) -> TabulatedStep:
+    """``scatter(scene, b, s, inst, wo, seed) -> SubsurfaceStep`` for pbrt-v4's subsurface material
+    and its parts, with a film's boundary (:mod:`renderer.materials.film_body`) compiled in where ``coated``."""
 
     @wp.func
     def entry_share_of(b: BSDF, cos_o: float) -> float:
@@ -226,7 +236,24 @@ def tabulated_scatter(coated: bool) -> wp.Function:
         return _bare_entry_weight(b, wo_local, u)
 
     @wp.func
-    def scatter(scene: Scene, b: BSDF, s: Surface, inst: int, wo: wp.vec3, seed: int) -> SubsurfaceStep:
+    def entry_of(b: BSDF, s: Surface, wo: wp.vec3, seed: int) -> Entry:
+        """The boundary's entry at a hit from outside (scatter's first draws): q, and where the path
+        enters the refracted sample's weight (0 on the surface route, from inside, or where it fails)."""
+        arrival = Entry()
+        cos_o = wp.dot(wo, s.ns)
+        if cos_o <= 0.0 or wp.dot(wo, s.ng) <= 0.0:
+            return arrival
+        rng = wp.rand_init(wp.int32(hash_u32(wp.uint32(seed) ^ TABULATED_SALT)))
+        arrival.q = entry_share_of(b, cos_o)
+        u_route = wp.randf(rng)
+        u_t = wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng))
+        if u_route < arrival.q:
+            arrival.weight = entry_weight_of(b, to_local(frame_from_tangent(s.ns, s.dpdu), wo), u_t)
+        return arrival
+
+    @wp.func
+    def scatter_entered(scene: Scene, b: BSDF, s: Surface, inst: int, wo: wp.vec3, seed: int,
+                        arrival: Entry) -> SubsurfaceStep:
         """pbrt-v4's subsurface material at a hit from outside: with probability q = 1 − F(cos θo) (a
         film's mean T over mean R + T) light enters (weight: one sample of the boundary's transmission,
         1/eta² included, over q; a film's also times the exit balance k), crosses
@@ -234,19 +261,21 @@ def tabulated_scatter(coated: bool) -> wp.Function:
         with the exit lobe Sw; otherwise the vertex keeps the dielectric's reflection (weight 1/(1 − q)).
         pbrt-v4 makes the same choice after sampling the whole dielectric; the split only moves the
         choice before next-event estimation, which then sees the reflection alone (light through the
-        transmission lobe of a closed body is blocked by the body itself)."""
+        transmission lobe of a closed body is blocked by the body itself). ``arrival``: ``entry_of``'s
+        at this hit (the wavefront computes a film's in a step of its own: renderer.integrators.film_entry)."""
         ev = _identity(b, s, wo)
         cos_o = wp.dot(wo, s.ns)
         if cos_o <= 0.0 or wp.dot(wo, s.ng) <= 0.0:
             return ev           # from inside the body: the plain dielectric
+        q = arrival.q
+        w_in = arrival.weight
         rng = wp.rand_init(wp.int32(hash_u32(wp.uint32(seed) ^ TABULATED_SALT)))
-        q = entry_share_of(b, cos_o)
         u_route = wp.randf(rng)
-        u_t = wp.vec3(wp.randf(rng), wp.randf(rng), wp.randf(rng))
+        for _ in range(3):      # the entry weight's draws
+            wp.randf(rng)
         if u_route >= q:
             return _surface_only(ev, 1.0 - q)
         f = frame_from_tangent(s.ns, s.dpdu)
-        w_in = entry_weight_of(b, to_local(f, wo), u_t)
         if w_in == wp.vec3(0.0):
             ev.weight = w_in
             return ev
@@ -294,7 +323,11 @@ def tabulated_scatter(coated: bool) -> wp.Function:
         ev.wo = si.ns
         return ev
 
-    return scatter
+    @wp.func
+    def scatter(scene: Scene, b: BSDF, s: Surface, inst: int, wo: wp.vec3, seed: int) -> SubsurfaceStep:
+        return scatter_entered(scene, b, s, inst, wo, seed, entry_of(b, s, wo, seed))
+
+    return TabulatedStep(entry_of, scatter_entered, scatter)
 
 
 @wp.func
@@ -321,7 +354,7 @@ def subsurface_step(features: Features) -> wp.Function:
     def step(scene: Scene, b: BSDF, s: Surface, inst: int, wo: wp.vec3, seed: int) -> SubsurfaceStep:
         if wp.static(tabulated_on):
             if b.kind == SUBSURFACE:
-                return wp.static(tabulated_scatter(coated))(scene, b, s, inst, wo, seed)
+                return wp.static(tabulated_scatter(coated).scatter)(scene, b, s, inst, wo, seed)
         if wp.static(disney_coated):
             return disney_film_scatter(scene, b, s, inst, wo, seed)
         if wp.static(disney_on):

@@ -343,26 +343,48 @@ def scatter_function(features: Features, independent: bool, kind: str | None = N
     return scatter
 
 
+@wp.struct
+class ProbeDraws:
+    """The subsurface step's first two numbers at a vertex: the wavelength's and its seed."""
+
+    u_lambda: float
+    seed: int
+
+
+@lru_cache(maxsize=None)
+def probe_draws(independent: bool) -> wp.Function:
+    """``draws(smp, ps, path) -> ProbeDraws``: ``scatter``'s first two draws, the same numbers."""
+
+    @wp.func(inline=True)
+    def draws(smp: SamplerParams, ps: PixelSample, path: PathState) -> ProbeDraws:
+        d = ProbeDraws()
+        if wp.static(independent):
+            rng = path.rng
+            d.u_lambda = wp.randf(rng)
+            d.seed = wp.randi(rng)
+        else:
+            dim = DIM_BOUNCE + path.depth * DIMS_PER_BOUNCE
+            d.u_lambda = get_1d(smp, ps, dim + WAVELENGTH)
+            d.seed = int(hashed_bits(ps, dim + SUBSURFACE))
+        return d
+
+    return draws
+
+
 @lru_cache(maxsize=None)
 def probe_function(features: Features, independent: bool, kind: str) -> wp.Function:
     """``probe(scene, smp, ps, path, hit, s, m) -> SubsurfaceStep``: the subsurface step ``scatter``
     takes at a vertex of ``kind`` (``moves_vertex``), with the same material parameters and numbers,
     for the wavefront's probe step, which keeps the probe rays out of the shading kernel."""
     step = subsurface_step(dataclasses.replace(features, materials=(kind,)))
+    draws = probe_draws(independent)
 
     @wp.func(inline=True)
     def probe(scene: Scene, smp: SamplerParams, ps: PixelSample, path: PathState, hit: Hit, s: Surface,
               m: int) -> SubsurfaceStep:
+        u = draws(smp, ps, path)
         b = load_bsdf(scene.mat, scene.tex, scene.spectral, scene.spectral_n, m, s)
-        u_sss = int(0)
-        if wp.static(independent):      # scatter's first two draws: the wavelength's, the seed
-            rng = path.rng
-            b.wavelength_u = wp.randf(rng)
-            u_sss = wp.randi(rng)
-        else:
-            dim = DIM_BOUNCE + path.depth * DIMS_PER_BOUNCE
-            b.wavelength_u = get_1d(smp, ps, dim + WAVELENGTH)
-            u_sss = int(hashed_bits(ps, dim + SUBSURFACE))
-        return step(scene, b, s, hit.inst, -path.d, u_sss)
+        b.wavelength_u = u.u_lambda
+        return step(scene, b, s, hit.inst, -path.d, u.seed)
 
     return probe

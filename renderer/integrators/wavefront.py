@@ -11,7 +11,8 @@ the light sample's shadow ray and the BSDF sample that continues the path; for t
 kernel spills past 1 KB (``split_shading``) two kernels over its queue, ``light_<kind>`` the light
 sample and then ``shade_<kind>`` the BSDF sample, so neither holds the other's code), each after a
 ``probe_<kind>`` for the kinds whose vertex subsurface scattering may move (the subsurface step
-and its probe rays through the BVH, so the shading kernel holds no BVH traversal),
+and its probe rays through the BVH, so the shading kernel holds no BVH traversal; before it
+``entry_subsurface`` where a film coats a subsurface body: renderer.integrators.film_entry),
 ``shadow`` (the shadow rays, and what they let through) and ``lenses`` in scenes with thin slabs
 (the shadow rays that meet only thin slabs' faces, traced face by face), until no path goes on;
 then ``finish`` (the film, dropped samples and ray counts as the megakernel writes them).
@@ -35,6 +36,7 @@ from renderer.device.kernel_options import GPU_LAUNCH_BOUNDS, KERNEL_OPTIONS
 from renderer.device.scene import Features, Scene
 from renderer.geometry.intersect import surface_at
 from renderer.geometry.offsets import offset_origin
+from renderer.integrators.film_entry import entered_probe, film_entry, film_entry_step
 from renderer.integrators.media_path import crossed, is_interface, media_functions, scattered_path, start_medium
 from renderer.integrators.path_state import (ARRIVED, BUMPS, FIRST_KIND, LENSES, RAYS, REDIRECTED, SHADOWS,
                                              PathBuffers, load_path, path_buffers, push, push_shadow, store_path,
@@ -245,8 +247,10 @@ def shade_kernel(features: Features, independent: bool, shader: Shader, part: st
 def probe_kernel(features: Features, independent: bool, shader: Shader) -> wp.Kernel:
     """The probe step of a kind whose vertex subsurface scattering may move (``moves_vertex``), before
     its shading kernel, over the same queue: the subsurface step (its probe rays through the BVH),
-    its weight and rays applied to the path, and where it left the vertex kept for shading."""
-    probe = probe_function(features, independent, shader.kind)
+    its weight and rays applied to the path, and where it left the vertex kept for shading (a film's
+    entry on the body from ``entry_kernel``, run before it: renderer.integrators.film_entry)."""
+    entered = film_entry_step(features, shader.kind)
+    probe = entered_probe(independent) if entered else probe_function(features, independent, shader.kind)
     queue = FIRST_KIND + shaders(features).index(shader)
 
     def probe_paths(scene: Scene, smp: SamplerParams, paths: PathBuffers):
@@ -256,12 +260,27 @@ def probe_kernel(features: Features, independent: bool, shader: Shader) -> wp.Ke
         ps = PixelSample()
         if wp.static(not independent):
             ps = paths.sample[i]
-        ev = probe(scene, smp, ps, load_path(paths, i), hit, s, paths.material[i])
+        if wp.static(entered):
+            ev = probe(scene, smp, ps, load_path(paths, i), hit, s, paths.material[i], paths.entry[i])
+        else:
+            ev = probe(scene, smp, ps, load_path(paths, i), hit, s, paths.material[i])
         paths.beta[i] = wp.cw_mul(paths.beta[i], ev.weight)
         paths.rays[i] = paths.rays[i] + ev.rays
         paths.exit[i] = exit_of(ev)
 
     return step_kernel(probe_paths)
+
+
+@lru_cache(maxsize=None)
+def entry_kernel(features: Features, independent: bool, shader: Shader) -> wp.Kernel:
+    """A film's entry on the coated bodies of the probe step's queue, before it (renderer.integrators.film_entry)."""
+    entry = film_entry(independent)
+    queue = FIRST_KIND + shaders(features).index(shader)
+
+    def entry_paths(scene: Scene, smp: SamplerParams, paths: PathBuffers):
+        entry(scene, smp, paths, paths.queue[queue, wp.tid()])
+
+    return step_kernel(entry_paths)
 
 
 def lens_step(features: Features) -> bool:
@@ -339,6 +358,8 @@ def wavefront_kernels(features: Features, independent: bool) -> dict[str, wp.Ker
     if features.bump:
         kernels["bump"] = bump_kernel(features)
     for shader in shaders(features):
+        if film_entry_step(features, shader.kind):
+            kernels[f"entry_{shader.kind}"] = entry_kernel(features, independent, shader)
         if moves_vertex(features, shader.kind):
             kernels[f"probe_{shader.kind}"] = probe_kernel(features, independent, shader)
         if split_shading(features, shader):
@@ -368,11 +389,13 @@ class Wavefront:
         names = [name for name in self.kernels if name.startswith("shade_")]     # in queue order (``shaders``)
         probed = any(name.startswith("probe_") for name in self.kernels)
         self.buffers = [path_buffers(self.max_paths, not self.independent, queues_of_kinds(names), len(names),
-                                     self.device, "bump" in self.kernels, "medium" in self.kernels, probed)
+                                     self.device, "bump" in self.kernels, "medium" in self.kernels, probed,
+                                     any(name.startswith("entry_") for name in self.kernels))
                         for _ in range(self.slots)]
         self.shaders = [self.kernels[name] for name in names]
-        # per shading kernel its probe step's kernel, run first over the same queue (None: none)
-        self.probes = [self.kernels.get("probe_" + name.removeprefix("shade_")) for name in names]
+        # per shading kernel its probe step's kernels (a film's entry, the probe), run first over the same queue
+        self.probes = [[self.kernels[step + name.removeprefix("shade_")] for step in ("entry_", "probe_")
+                        if step + name.removeprefix("shade_") in self.kernels] for name in names]
         # per shading kernel its light part's kernel, run before it over the same queue (None: one kernel)
         self.lights = [self.kernels.get("light_" + name.removeprefix("shade_")) for name in names]
 
@@ -383,11 +406,11 @@ class Wavefront:
         Every kernel after ``start`` runs over a queue, whose length the host reads (twice per
         depth: after ``hits``, the shading queues; after shading, the rays and shadow rays to
         trace); the loop ends when no path is left to trace, by ``max_depth`` at the latest. The probe
-        steps run first, then the bump step (where the probes left the vertices), then the shading
-        kernels (a split shader's light sample before its BSDF sample, which advances the path); the
-        lens step after the shadow kernel; with media the medium step runs between
-        ``intersect`` and ``hits`` (one more read of a queue's length), and the paths it or ``hits``
-        redirected join the rays that shading continues."""
+        steps (a film's entry, then the probe) run first, then the bump step (where the probes left
+        the vertices), then the shading kernels (a split shader's light sample before its BSDF
+        sample, which advances the path); the lens step after the shadow kernel; with media the
+        medium step runs between ``intersect`` and ``hits`` (one more read of a queue's length), and
+        the paths it or ``hits`` redirected join the rays that shading continues."""
         k, paths, dev = self.kernels, self.buffers[slot], self.device
         n = rows * scene.cam.width
         wp.launch(k["start"], dim=n, inputs=[scene, smp, seed, sample_index, first_row, paths], device=dev)
@@ -403,8 +426,8 @@ class Wavefront:
                 wp.launch(k["hits"], dim=arrived, inputs=[scene, paths, max_depth], device=dev)
             queued = paths.queued.numpy().copy()
             paths.queued.zero_()
-            for probe, count in zip(self.probes, queued[FIRST_KIND:]):
-                if probe is not None and count > 0:
+            for probes, count in zip(self.probes, queued[FIRST_KIND:]):
+                for probe in probes if count > 0 else ():
                     wp.launch(probe, dim=int(count), inputs=[scene, smp, paths], device=dev)
             if queued[BUMPS] > 0:
                 wp.launch(k["bump"], dim=int(queued[BUMPS]), inputs=[scene, paths], device=dev)

@@ -171,19 +171,24 @@ def test_tabulated_subsurface_probe_fits_the_target():
     """pbrt-v4's subsurface material's probe step (its tabulated profile, the spline inversion that
     samples the radius and the spectral body, beside the BVH's probe loop) fits the design's budget
     under the register cap: 2,256 B of frame in disney_film and translucent_films before the BSDF's
-    slots, the body's channels and the table's rows were read at constant indices (docs/gpu.md,
-    "The tabulated subsurface probe"). Compiled from the smallest scene with the material."""
+    slots, the body's channels and the table's rows were read at constant indices, 1,088 B while a
+    film's entry (the coating's out-of-line optics at six sites) was computed in it, not in a step
+    of its own before it (docs/gpu.md, "The tabulated subsurface probe"). Compiled from the smallest
+    scene with a film on the body, both steps, and from the smallest without one."""
     from renderer.api import load_scene
     from renderer.device.scene import upload
     from renderer.integrators.shader_queues import shaders
-    from renderer.integrators.wavefront import probe_kernel
+    from renderer.integrators.wavefront import entry_kernel, probe_kernel
 
-    features = upload(load_scene(ROOT / "tests" / "data" / "pbrt" / "subsurface_skin.pbrt"), "cpu", 8, 8).features
-    assert features.subsurface
-    shader = next(sh for sh in shaders(features) if sh.kind == "subsurface")
-    [row] = compile_kernels({"probe_subsurface": probe_kernel(features, True, shader)}, [90])
-    assert row.resources.registers <= TARGET.registers, row.resources
-    assert row.resources.stack_bytes <= TARGET.stack_bytes, row.resources
+    coated = upload(load_scene(ROOT / "scenes" / "translucent_films.pbrt"), "cpu", 8, 8).features
+    bare = upload(load_scene(ROOT / "tests" / "data" / "pbrt" / "subsurface_skin.pbrt"), "cpu", 8, 8).features
+    assert coated.coated_body and not bare.coated_body
+    shader, bare_shader = (next(sh for sh in shaders(f) if sh.kind == "subsurface") for f in (coated, bare))
+    for row in compile_kernels({"entry_subsurface": entry_kernel(coated, True, shader),
+                                "probe_subsurface": probe_kernel(coated, True, shader),
+                                "probe_subsurface_bare": probe_kernel(bare, True, bare_shader)}, [90]):
+        assert row.resources.registers <= TARGET.registers, row.resources
+        assert row.resources.stack_bytes <= TARGET.stack_bytes, row.resources
 
 
 def test_media_steps_fit_the_target():
