@@ -22,8 +22,9 @@ x_A = G e / L̄_A and the symmetric G from the outside: the bare interface's tra
 re-weighted by the coating's hemispherical R̄ and T̄ against the bare F̄, times L̄_out / e, clipped so
 that x ≤ 1 inside; hence η_A² f(A→B) = η_B² f(B→A), and a 0 nm coating (ρ = 0) is the bare
 dielectric's compensation. Each evaluation reads the coating at the FACET_NODES − 1 non-grazing
-nodes from both sides. Equal media (e = 1) are not compensated. The hemispherical means R̄, T̄, F̄
-weigh the outside nodes as cosines, which they are unless the outside is the denser medium.
+nodes from both sides, and from wi's side again where wi is not on wo's. Equal media (e = 1) are not
+compensated. The hemispherical means R̄, T̄, F̄ weigh the outside nodes as cosines, which they are
+unless the outside is the denser medium.
 
 Opaque substrate: :func:`mean_reflectance` is the F̄ of Kulla and Conty's reflection lobe.
 """
@@ -220,8 +221,8 @@ def coating_ms_eval(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.
                     rows: wp.array(dtype=wp.vec4)) -> BSDFEval:
     """:func:`coating_eval` (both sides) plus the compensation lobe (see above); the density is that
     of :func:`coating_ms_sample`. The single-scattering part is evaluated first, so that only its
-    value crosses the 2 (FACET_NODES − 1) calls of :func:`coat_energy` rather than the nodes' 72
-    values the coating's call at wi (docs/gpu.md, "The thin film's nodes")."""
+    value crosses the nodes' calls of :func:`coat_energy` rather than the nodes' values the coating's
+    call at wi (docs/gpu.md, "The thin film's nodes")."""
     ev = coating_eval(c, eta, alpha, wo, wi, BOTH_SIDES, radiance)
     if eta == 1.0 or is_smooth(alpha) or wo[2] == 0.0 or wi[2] == 0.0:
         return ev
@@ -229,8 +230,8 @@ def coating_ms_eval(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.
 
 
 @wp.func
-def _with_multiple(single: BSDFEval, q: CoatEnergy, c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3, radiance: bool,
-                   rows: wp.array(dtype=wp.vec4)) -> BSDFEval:
+def _with_multiple(single: BSDFEval, q: CoatEnergy, c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3,
+                   wi: wp.vec3, radiance: bool, rows: wp.array(dtype=wp.vec4)) -> BSDFEval:
     """Single scattering (``single``, :func:`coating_eval` at wo and wi) plus the lobe, for a wo whose
     CoatEnergy q is known."""
     ev = single
