@@ -22,8 +22,9 @@ x_A = G e / L̄_A and the symmetric G from the outside: the bare interface's tra
 re-weighted by the coating's hemispherical R̄ and T̄ against the bare F̄, times L̄_out / e, clipped so
 that x ≤ 1 inside; hence η_A² f(A→B) = η_B² f(B→A), and a 0 nm coating (ρ = 0) is the bare
 dielectric's compensation. Each evaluation reads the coating at the FACET_NODES − 1 non-grazing
-nodes from both sides. Equal media (e = 1) are not compensated. The hemispherical means R̄, T̄, F̄
-weigh the outside nodes as cosines, which they are unless the outside is the denser medium.
+nodes from both sides, and from wi's side again where wi is not on wo's. Equal media (e = 1) are not
+compensated. The hemispherical means R̄, T̄, F̄ weigh the outside nodes as cosines, which they are
+unless the outside is the denser medium.
 
 Opaque substrate: :func:`mean_reflectance` is the F̄ of Kulla and Conty's reflection lobe.
 """
@@ -106,12 +107,63 @@ def _safe_div(a: wp.vec3, b: wp.vec3) -> wp.vec3:
 
 
 @wp.struct
+class CoatSide:
+    """The coating at the nodes seen from one side: ρ, and the node-weighted sums of R, T and F that
+    give the hemispherical means (used from the outside only)."""
+    shift: FacetShift
+    r: wp.vec3
+    t: wp.vec3
+    f: float
+
+
+@wp.func
+def coat_side(c: Coating, eta: float, outside: bool) -> CoatSide:
+    """The coating at the FACET_NODES − 1 non-grazing nodes from the outside (relative index eta) or
+    the inside (1/eta); node 0 (grazing: R = F = 1, T = 0 from either side) continues node 1.
+
+    One side at a time: the lobe keeps one side's 36 values at most across the coating's calls, and
+    takes the other side's again where wi is on it (docs/gpu.md, "The thin film's nodes")."""
+    e = wp.where(outside, eta, 1.0 / eta)
+    n_r = FacetVector()
+    n_g = FacetVector()
+    n_b = FacetVector()
+    w0 = _node_weight(0)
+    r_sum = wp.vec3(w0)
+    t_sum = wp.vec3(0.0)
+    f_sum = w0
+    for jj in range(FACET_NODES - 1):
+        j = FACET_NODES - 1 - jj
+        u = float(j) / float(FACET_NODES - 1)
+        cj = node_cosine(u, e)
+        rj, tj = coating_rgb(c, wp.where(outside, cj, -cj))
+        fj = fresnel_dielectric(cj, e)
+        w = _node_weight(j)
+        r_sum += rj * w
+        t_sum += tj * w
+        f_sum += fj * w
+        rho = _relative_shift(rj, fj)
+        n_r[j] = rho[0]
+        n_g[j] = rho[1]
+        n_b[j] = rho[2]
+    n_r[0] = n_r[1]
+    n_g[0] = n_g[1]
+    n_b[0] = n_b[1]
+    s = CoatSide()
+    s.shift.r = n_r
+    s.shift.g = n_g
+    s.shift.b = n_b
+    s.r = r_sum
+    s.t = t_sum
+    s.f = f_sum
+    return s
+
+
+@wp.struct
 class CoatEnergy:
     """What the compensation lobe of a clear coating needs for one wo (see above)."""
     e: float              # relative index from wo's side
     side: float           # 1: wo outside, -1: inside
-    shift_a: FacetShift   # ρ from wo's side
-    shift_b: FacetShift   # and from the other
+    shift_a: FacetShift   # ρ from wo's side (the other side's is taken again where wi is on it)
     l_o: wp.vec3          # L_A(μo)
     mean_a: wp.vec3       # L̄_A
     mean_b: wp.vec3       # L̄_B
@@ -124,70 +176,24 @@ class CoatEnergy:
 def coat_energy(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, rows: wp.array(dtype=wp.vec4)) -> CoatEnergy:
     a = effective_alpha(alpha)
     q = CoatEnergy()
-    q.side = wp.where(wo[2] > 0.0, 1.0, -1.0)
-    q.e = wp.where(wo[2] > 0.0, eta, 1.0 / eta)
-    # the coating at the nodes from both sides; node 0 (grazing) has R = F = 1, T = 0 from either
-    out_r = FacetVector()
-    out_g = FacetVector()
-    out_b = FacetVector()
-    in_r = FacetVector()
-    in_g = FacetVector()
-    in_b = FacetVector()
-    w0 = _node_weight(0)
-    r_out = wp.vec3(w0)
-    t_out = wp.vec3(0.0)
-    f_out = w0
-    for jj in range(FACET_NODES - 1):
-        j = FACET_NODES - 1 - jj
-        u = float(j) / float(FACET_NODES - 1)
-        co = node_cosine(u, eta)
-        rj, tj = coating_rgb(c, co)
-        fj = fresnel_dielectric(co, eta)
-        w = _node_weight(j)
-        r_out += rj * w
-        t_out += tj * w
-        f_out += fj * w
-        ro = _relative_shift(rj, fj)
-        out_r[j] = ro[0]
-        out_g[j] = ro[1]
-        out_b[j] = ro[2]
-        ci = node_cosine(u, 1.0 / eta)
-        r_in, t_in = coating_rgb(c, -ci)
-        ri = _relative_shift(r_in, fresnel_dielectric(ci, 1.0 / eta))
-        in_r[j] = ri[0]
-        in_g[j] = ri[1]
-        in_b[j] = ri[2]
-    # node 0 (grazing on the rarer side: R = F = 1 and ρ = 0/0) continues node 1
-    out_r[0] = out_r[1]
-    out_g[0] = out_g[1]
-    out_b[0] = out_b[1]
-    in_r[0] = in_r[1]
-    in_g[0] = in_g[1]
-    in_b[0] = in_b[1]
-    outside = FacetShift()
-    outside.r = out_r
-    outside.g = out_g
-    outside.b = out_b
-    inside = FacetShift()
-    inside.r = in_r
-    inside.g = in_g
-    inside.b = in_b
-    l_out = _mean_loss(rows, outside, a, eta)
-    l_in = _mean_loss(rows, inside, a, 1.0 / eta)
+    outside = wo[2] > 0.0
+    q.side = wp.where(outside, 1.0, -1.0)
+    q.e = wp.where(outside, eta, 1.0 / eta)
+    # the other side first, reduced to its mean loss before wo's side is read
+    other = coat_side(c, eta, not outside)
+    q.mean_b = _mean_loss(rows, other.shift, a, wp.where(outside, 1.0 / eta, eta))
+    own = coat_side(c, eta, outside)
+    q.shift_a = own.shift
+    q.mean_a = _mean_loss(rows, own.shift, a, q.e)
     x = dielectric_transmit_share(rows, alpha, eta)
+    r_out = wp.where(outside, own.r, other.r)
+    t_out = wp.where(outside, own.t, other.t)
+    f_out = wp.where(outside, own.f, other.f)
+    l_out = wp.where(outside, q.mean_a, q.mean_b)
+    l_in = wp.where(outside, q.mean_b, q.mean_a)
     refl = r_out * ((1.0 - x) / wp.max(f_out, 1.0e-6))
     tran = t_out * (x / wp.max(1.0 - f_out, 1.0e-6))
     q.share = wp.min(wp.cw_mul(_safe_div(tran, refl + tran), l_out) / eta, l_in * eta)
-    if wo[2] > 0.0:
-        q.shift_a = outside
-        q.shift_b = inside
-        q.mean_a = l_out
-        q.mean_b = l_in
-    else:
-        q.shift_a = inside
-        q.shift_b = outside
-        q.mean_a = l_in
-        q.mean_b = l_out
     q.l_o = _loss(rows, q.shift_a, wp.abs(wo[2]), a, q.e)
     q.p_ms = wp.clamp(mean3(q.l_o), 0.0, 1.0)
     if mean3(q.l_o) > 0.0:
@@ -197,11 +203,13 @@ def coat_energy(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, rows: wp.ar
 
 
 @wp.func
-def coat_multiple(q: CoatEnergy, alpha: wp.vec2, wi: wp.vec3, rows: wp.array(dtype=wp.vec4)) -> wp.vec3:
+def coat_multiple(q: CoatEnergy, c: Coating, eta: float, alpha: wp.vec2, wi: wp.vec3,
+                  rows: wp.array(dtype=wp.vec4)) -> wp.vec3:
     """The compensation lobe at wi (without the cosine and without the 1/e² of radiance)."""
     a = effective_alpha(alpha)
     if wi[2] * q.side < 0.0:
-        l_i = _loss(rows, q.shift_b, wp.abs(wi[2]), a, 1.0 / q.e)
+        shift_b = coat_side(c, eta, q.side < 0.0).shift
+        l_i = _loss(rows, shift_b, wp.abs(wi[2]), a, 1.0 / q.e)
         return _safe_div(wp.cw_mul(q.share * (q.e * INV_PI), wp.cw_mul(q.l_o, l_i)), wp.cw_mul(q.mean_a, q.mean_b))
     l_i = _loss(rows, q.shift_a, wp.abs(wi[2]), a, q.e)
     x_a = wp.min(_safe_div(q.share * q.e, q.mean_a), wp.vec3(1.0))
@@ -213,22 +221,22 @@ def coating_ms_eval(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, wi: wp.
                     rows: wp.array(dtype=wp.vec4)) -> BSDFEval:
     """:func:`coating_eval` (both sides) plus the compensation lobe (see above); the density is that
     of :func:`coating_ms_sample`. The single-scattering part is evaluated first, so that only its
-    value crosses the 2 (FACET_NODES − 1) calls of :func:`coat_energy` rather than the nodes' 72
-    values the coating's call at wi (docs/gpu.md, "The thin film's nodes")."""
+    value crosses the nodes' calls of :func:`coat_energy` rather than the nodes' values the coating's
+    call at wi (docs/gpu.md, "The thin film's nodes")."""
     ev = coating_eval(c, eta, alpha, wo, wi, BOTH_SIDES, radiance)
     if eta == 1.0 or is_smooth(alpha) or wo[2] == 0.0 or wi[2] == 0.0:
         return ev
-    return _with_multiple(ev, coat_energy(c, eta, alpha, wo, rows), alpha, wo, wi, radiance, rows)
+    return _with_multiple(ev, coat_energy(c, eta, alpha, wo, rows), c, eta, alpha, wo, wi, radiance, rows)
 
 
 @wp.func
-def _with_multiple(single: BSDFEval, q: CoatEnergy, alpha: wp.vec2, wo: wp.vec3, wi: wp.vec3, radiance: bool,
-                   rows: wp.array(dtype=wp.vec4)) -> BSDFEval:
+def _with_multiple(single: BSDFEval, q: CoatEnergy, c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3,
+                   wi: wp.vec3, radiance: bool, rows: wp.array(dtype=wp.vec4)) -> BSDFEval:
     """Single scattering (``single``, :func:`coating_eval` at wo and wi) plus the lobe, for a wo whose
     CoatEnergy q is known."""
     ev = single
     transmit = wo[2] * wi[2] < 0.0
-    f = coat_multiple(q, alpha, wi, rows)
+    f = coat_multiple(q, c, eta, alpha, wi, rows)
     if transmit and radiance:
         f = f / (q.e * q.e)
     ev.f = ev.f + f
@@ -276,7 +284,7 @@ def coating_ms_sample(c: Coating, eta: float, alpha: wp.vec2, wo: wp.vec3, u: wp
     if wi[2] == 0.0:
         return failed_sample()
     transmit = wo[2] * wi[2] < 0.0
-    f = coat_multiple(q, alpha, wi, rows)
+    f = coat_multiple(q, c, eta, alpha, wi, rows)
     if transmit and radiance:
         f = f / (q.e * q.e)
     ev = coating_eval(c, eta, alpha, wo, wi, BOTH_SIDES, radiance)

@@ -262,6 +262,23 @@ def test_rough_multiscattering_films_fit_the_target():
         assert row.resources.stack_bytes <= TARGET.stack_bytes, (row.name, row.resources)
 
 
+def test_every_feature_thin_film_bsdf_halves_fit_the_target():
+    """With every feature at once, the thin film's light and BSDF halves fit the design's budget. The
+    BSDF half (``shade_thinfilm``) was 1,072 B of frame: the compensation lobe of a clear rough film
+    kept the coating at its nodes from both sides (72 values) across the optics' calls that produce
+    them; one side at a time, the other taken again where wi is on it, it is 1,008 B (docs/gpu.md,
+    "The thin film's nodes"). Only these two kernels compile (about two minutes)."""
+    from renderer.integrators.kernels import render_kernels
+
+    every = every_feature()
+    kernels = {name: k for name, k in render_kernels(every, False, wavefront=True).items()
+               if name in ("light_thinfilm", "shade_thinfilm")}
+    assert len(kernels) == 2, set(kernels)
+    for row in compile_kernels(kernels, [90]):
+        assert row.resources.registers <= TARGET.registers, (row.name, row.resources)
+        assert row.resources.stack_bytes <= TARGET.stack_bytes, (row.name, row.resources)
+
+
 def test_gpu_check_refuses_without_a_gpu():
     import subprocess
     import sys
