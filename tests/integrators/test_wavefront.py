@@ -33,6 +33,7 @@ CASES = [
     (ROOT / "scenes" / "ar_coating.pbrt", None, 32, 18, 2),           # thin film
     (PBRT / "v3_materials_upgraded.pbrt", "halton", 32, 24, 2),       # coatings, a bump map, a mix
     (PBRT / "subsurface_skin.pbrt", None, 24, 24, 2),                 # pbrt-v4's subsurface, spectral body
+    (ROOT / "scenes" / "translucent_films.pbrt", None, 24, 14, 2),    # a film on its body: the entry step
     (PBRT / "thin_slab_shadow.pbrt", None, 24, 18, 2),                # shadow rays through a thin lens
     (PBRT / "films_walk.pbrt", None, 32, 18, 2),                      # walking and one-pass films, bump maps
     (PBRT / "bumped_subsurface.pbrt", None, 32, 18, 2),               # bump maps with and without subsurface
@@ -56,7 +57,7 @@ def test_cases_cover_the_features():
     assert {"diffuse", "dielectric", "conductor", "thinfilm", "disney", "coateddiffuse", "subsurface"} <= kinds, kinds
     lights = {k for f in features for k in f.lights}
     assert {"infinite", "distant", "diffuse"} <= lights, lights
-    for flag in ("mix", "alpha", "dispersion", "subsurface", "bump", "thin_slabs", "media"):
+    for flag in ("mix", "alpha", "dispersion", "subsurface", "bump", "thin_slabs", "media", "coated_body"):
         assert any(getattr(f, flag) for f in features), flag
     assert any(f.layered and f.unlayered and f.bump for f in features)     # the walk's own kernel
     samplers = {c[1] or load_scene(c[0]).sampler.kind for c in CASES}
