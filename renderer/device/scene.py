@@ -34,7 +34,8 @@ class Scene:
     shape_alpha: wp.array(dtype=int)    # alpha texture id, -1 opaque (see renderer.integrators.visibility)
     spectral: RgbWeightTable    # the thin-film BSDF's spectrum → RGB weights (1 dummy entry if unused)
     spectral_n: int             # its wavelengths per evaluation, 0 for rgb3
-    media: Media                # participating media (a one-entry stand-in unless Features.media)
+    media: wp.array(dtype=Media)   # participating media: one struct (a stand-in unless Features.media), in an array
+                                # because Warp's CPU kernels copy their arguments per thread (by value: 8 % of the demo)
     shape_media: wp.array(dtype=wp.vec2i)   # per shape its MediumInterface (inside, outside); -1 vacuum
     camera_medium: int          # the medium camera rays start in, -1 vacuum
 
@@ -143,7 +144,7 @@ def upload(desc: SceneDescription, device: str, width: int | None = None, height
     films = thinfilm.NAME in used or lobes["coated_body"] or lobes["coated_disney"]    # films integrated over the wavelength
     S.spectral, S.spectral_n = _spectral_table(films, dispersion or spectral_sss, thin_film, device)
     media_up = upload_media(desc.media if media else [], device)
-    S.media = media_up.struct
+    S.media = wp.array([media_up.struct], dtype=Media, device=device)
     pairs = [(s.media.inside, s.media.outside) for s in desc.shapes] if media else []
     S.shape_media = wp.array(np.array(pairs or [(-1, -1)], np.int32), dtype=wp.vec2i, device=device)
     S.camera_medium = desc.camera_medium if media else -1

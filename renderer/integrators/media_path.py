@@ -124,7 +124,7 @@ def media_functions(features: Features) -> MediaFunctions:
             if hit.inst >= 0:
                 seg = hit.t
             if m >= 0:
-                res = ratio_track(scene.media, m, origin, d, seg, c, res.rng, res.T, res.r)
+                res = ratio_track(scene.media[0], m, origin, d, seg, c, res.rng, res.T, res.r)
                 if max3(res.T) <= 0.0:
                     return res
             if hit.inst < 0:
@@ -147,7 +147,7 @@ def media_functions(features: Features) -> MediaFunctions:
         MIS against phase sampling), then a direction sampled from the phase function."""
         res = Scattered()
         res.L = wp.vec3(0.0)
-        g = scene.media.g[medium]
+        g = scene.media[0].g[medium]
         state = rng
         if wp.static(light_sampling):
             u_sel = wp.randf(state)

@@ -61,7 +61,7 @@ def integrator_kernel(features: Features, independent: bool = False) -> wp.Kerne
                     t_hit = float(1.0e30)
                     if hit.inst >= 0:
                         t_hit = hit.t
-                    tr = delta_track(scene.media, ms.medium, st.o, st.d, t_hit, ms.c, ms.rng, st.beta, ms.r_u,
+                    tr = delta_track(scene.media[0], ms.medium, st.o, st.d, t_hit, ms.c, ms.rng, st.beta, ms.r_u,
                                      st.L, st.depth < max_depth)
                     ms.rng = tr.rng
                     st.beta = tr.beta

@@ -149,7 +149,7 @@ def medium_kernel(features: Features) -> wp.Kernel:
         t_hit = float(1.0e30)
         if hit.inst >= 0:
             t_hit = hit.t
-        tr = delta_track(scene.media, ms.medium, st.o, st.d, t_hit, ms.c, ms.rng, st.beta, ms.r_u, st.L,
+        tr = delta_track(scene.media[0], ms.medium, st.o, st.d, t_hit, ms.c, ms.rng, st.beta, ms.r_u, st.L,
                          st.depth < max_depth)
         ms.rng = tr.rng
         st.beta = tr.beta
