@@ -34,8 +34,8 @@ class Scene:
     shape_alpha: wp.array(dtype=int)    # alpha texture id, -1 opaque (see renderer.integrators.visibility)
     spectral: RgbWeightTable    # the thin-film BSDF's spectrum → RGB weights (1 dummy entry if unused)
     spectral_n: int             # its wavelengths per evaluation, 0 for rgb3
-    media: wp.array(dtype=Media)   # participating media: one struct (a stand-in unless Features.media), in an array
-                                # because Warp's CPU kernels copy their arguments per thread (by value: 8 % of the demo)
+    media: wp.array(dtype=Media)    # participating media: one struct (a stand-in unless Features.media), in an
+                                    # array: by value, every CPU thread's copy of the arguments took it (demo 8 %)
     shape_media: wp.array(dtype=wp.vec2i)   # per shape its MediumInterface (inside, outside); -1 vacuum
     camera_medium: int          # the medium camera rays start in, -1 vacuum
 
